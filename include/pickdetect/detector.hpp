@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+#pragma once
+
+#include <pickdetect/matching.hpp>
+#include <pickdetect/model.hpp>
+
+#include <opencv2/core.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pickdetect {
+
+/// How instances are found from the matches.
+enum class Method {
+  Voting,          ///< The seed paper's method: centre votes, mean shift, principal points.
+  RansacClustered, ///< Baseline: one RANSAC homography per mean-shift cluster of centre votes.
+  RansacAll,       ///< Baseline: one RANSAC homography over all matches (one instance at most).
+};
+
+const char* method_name(Method method);
+/// Parses "voting", "ransac-clustered" or "ransac-all"; throws Error on anything else.
+Method parse_method(const std::string& name);
+
+/// The numbers that matter, with their units. Defaults are the element's property defaults.
+struct Settings {
+  Method method = Method::Voting;
+  double ratio = 0.8;      ///< 2NN ratio test threshold (nearest / second nearest).
+  int min_matches = 6;     ///< Fewest supporting matches an instance needs.
+  double bandwidth = 0.0;  ///< Mean-shift bandwidth in scene pixels; 0 = automatic.
+  int max_instances = 0;   ///< At most this many instances per frame, best first; 0 = no limit.
+  bool allow_scale = true; ///< Votes use the keypoints' scale ratio (else scale is fixed at 1).
+  bool refine = true;      ///< Refit each instance's pose on its own inlier matches.
+  double ransac_reprojection_px = 5.0; ///< RANSAC baselines: inlier distance in scene pixels.
+};
+
+/// One object instance found in the frame, in scene pixels (y axis down).
+struct Instance {
+  int model = 0; ///< Index of the model in the detector's list.
+  std::string model_name;
+  std::vector<cv::Point2f> points;  ///< The model's principal points; [0] is the centre.
+  std::vector<cv::Point2f> outline; ///< The model's outline carried into the scene.
+  cv::Point2f center;
+  double angle = 0.0;       ///< Degrees in [0, 360), clockwise on screen (image y axis down).
+  double scale = 1.0;       ///< Scene size / model size.
+  int matches = 0;          ///< Matches that support the instance.
+  double score = 0.0;       ///< Confidence in [0, 1].
+  double visibility = 1.0;  ///< Estimated fraction of the outline that is seen.
+  bool pickable = false;    ///< Nothing detected lies on it (see occlusion.hpp).
+  int pick_order = 0;       ///< 1 = pick first among the pickable instances; 0 = not pickable.
+  cv::Point2f grasp;        ///< The model's grasp point in the scene.
+  double grasp_angle = 0.0; ///< Gripper angle in degrees (the instance's angle).
+};
+
+/// Time spent in each stage of one detection, in milliseconds.
+struct Timings {
+  double features_ms = 0.0;
+  double matching_ms = 0.0;
+  double clustering_ms = 0.0; ///< Voting / RANSAC, mean shift, pose and occlusion.
+};
+
+struct Detection {
+  std::vector<Instance> instances;
+  Timings timings;
+  int scene_keypoints = 0;
+  int matches = 0;
+};
+
+/// Finds every instance of its models in grey frames. Immutable after construction, so one
+/// detector may serve several threads; swapping models means building a new detector.
+class Detector {
+public:
+  explicit Detector(std::vector<Model> models);
+
+  /// Detects in a grey frame (CV_8UC1, any stride; the data is only read).
+  Detection detect(const cv::Mat& grey, const Settings& settings = Settings()) const;
+
+  /// Detects from features already extracted from the frame.
+  Detection detect(const Features& scene, const cv::Size& frame_size,
+                   const Settings& settings = Settings()) const;
+
+  const std::vector<Model>& models() const { return models_; }
+
+private:
+  std::vector<Model> models_;
+  Matcher matcher_;
+};
+
+} // namespace pickdetect

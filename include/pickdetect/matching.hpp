@@ -1,0 +1,33 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+#pragma once
+
+#include <pickdetect/features.hpp>
+#include <pickdetect/model.hpp>
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace pickdetect {
+
+/// Matches scene descriptors against the descriptors of every model at once: the two nearest
+/// neighbours of a scene descriptor are searched over all models together, so a scene feature
+/// that fits two models about equally well fails the ratio test and decides for neither.
+class Matcher {
+public:
+  Matcher() = default;
+  explicit Matcher(const std::vector<Model>& models);
+
+  /// Matches with the 2NN ratio test: nearest / second nearest distance below `ratio`.
+  /// The result is ordered by scene keypoint and does not depend on threads or timing.
+  std::vector<Match> match(const cv::Mat& scene_descriptors, double ratio) const;
+
+  bool empty() const { return descriptors_.empty(); }
+
+private:
+  cv::Mat descriptors_;     ///< All models' descriptors, stacked.
+  std::vector<int> owner_;  ///< Row -> model index.
+  std::vector<int> offset_; ///< Model index -> first row.
+};
+
+} // namespace pickdetect

@@ -1,0 +1,48 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <string>
+#include <vector>
+
+namespace pickdetect {
+
+/// The object to look for: one model picture, its principal points and its outline, plus the
+/// SIFT features of the picture (computed, or read back from a model file's cache).
+struct Model {
+  std::string name;       ///< Shown as the instance's model name (ROI type, overlay label).
+  std::string image_path; ///< The model picture the features come from.
+  cv::Mat image;          ///< Grey picture, CV_8UC1.
+  cv::Mat mask;           ///< CV_8UC1, 255 where the picture shows the object.
+  /// Principal points in model pixels; [0] is the object centre, the rest grasping / delimiting
+  /// points.
+  std::vector<cv::Point2f> principal_points;
+  std::vector<cv::Point2f> outline; ///< Outline polygon in model pixels.
+  int grasp_point = 0;              ///< Index into principal_points of the grasp point.
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors; ///< CV_32F, one row per keypoint.
+};
+
+/// Fewest keypoints a model picture must yield to be usable.
+constexpr int kMinModelKeypoints = 12;
+
+/// Builds a model from a picture. A picture with an alpha channel marks the object by its alpha;
+/// otherwise the whole picture is the object. Principal points default to the centre and the
+/// four corners of the object's bounding box, the outline to the alpha contour or the picture's
+/// rectangle. Throws Error naming the file when it cannot be read or yields too few keypoints.
+Model model_from_picture(const std::string& picture_path, const std::string& name = {});
+
+/// Loads a model file (YAML, see README) or, for any other file, a plain picture with default
+/// points. Throws Error naming the file and the reason.
+Model load_model(const std::string& path);
+
+/// Writes a model file. The picture path is stored relative to the file's folder when it lies
+/// below it. With cache_features the keypoints and descriptors are stored too, so that loading
+/// does not recompute them.
+void save_model(const Model& model, const std::string& path, bool cache_features = true);
+
+/// Computes the model's features from its picture and mask (used by the loaders).
+void compute_model_features(Model& model);
+
+} // namespace pickdetect

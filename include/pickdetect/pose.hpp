@@ -1,0 +1,33 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace pickdetect {
+
+/// scene = scale * R(angle) * model + translation, in image coordinates (y axis down), so a
+/// positive angle turns clockwise on screen.
+struct Similarity {
+  double angle = 0.0; ///< Degrees in [0, 360).
+  double scale = 1.0;
+  cv::Point2d translation;
+
+  cv::Point2f apply(cv::Point2f p) const;
+  std::vector<cv::Point2f> apply(const std::vector<cv::Point2f>& points) const;
+};
+
+/// Least-squares similarity (or, without allow_scale, rigid transform) that carries `from`
+/// onto `to` (Umeyama). Needs two points or more; returns false when the fit is degenerate.
+bool fit_similarity(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                    bool allow_scale, Similarity& out);
+
+/// Similarity of a 3x3 homography near `at` (model coordinates): rotation and scale of the
+/// homography's local linear part there, and where it carries `at`.
+Similarity similarity_near(const cv::Matx33d& homography, cv::Point2f at);
+
+/// Smallest angular difference in degrees between two angles, in [0, 180].
+double angle_difference(double a, double b);
+
+} // namespace pickdetect

@@ -1,0 +1,345 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// The detector: features, matching, then one of the three methods per model, then occlusion.
+#include <pickdetect/detector.hpp>
+#include <pickdetect/error.hpp>
+#include <pickdetect/meanshift.hpp>
+#include <pickdetect/occlusion.hpp>
+#include <pickdetect/pose.hpp>
+#include <pickdetect/ransac.hpp>
+#include <pickdetect/voting.hpp>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+namespace pickdetect {
+namespace {
+
+/// Automatic mean-shift bandwidth: this share of the model's smaller side (scene pixels at
+/// scale 1). Wide enough to gather one instance's scattered centre votes, narrow enough to keep
+/// the centres of overlapping neighbours apart.
+constexpr double kAutoBandwidthShare = 0.15;
+/// Refinement: a match is an inlier of a pose when its scene keypoint lies within this share of
+/// the model's smaller side (at least kMinInlierPx) of where the pose puts its model keypoint...
+constexpr double kInlierShare = 0.02;
+constexpr double kMinInlierPx = 3.0;
+/// ...its orientation agrees with the pose's within this many degrees...
+constexpr double kInlierAngleDeg = 30.0;
+/// ...and, with allow_scale, its size ratio lies within this factor of the pose's scale.
+constexpr double kInlierScaleFactor = 1.5;
+constexpr int kRefineRounds = 4;
+/// Score: an instance with this many supporting matches scores 0.5.
+constexpr double kHalfScoreMatches = 10.0;
+/// Frames smaller than this on a side hold no instance worth a SIFT run.
+constexpr int kMinFrameSide = 16;
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+double model_side(const Model& model) {
+  const cv::Rect2f box = cv::boundingRect(model.outline);
+  return std::max(1.0f, std::min(box.width, box.height));
+}
+
+double score_for(int matches) {
+  return matches / (matches + kHalfScoreMatches);
+}
+
+/// Fills an instance's geometry from a similarity pose.
+void place(Instance& inst, const Model& model, const Similarity& pose) {
+  inst.points = pose.apply(model.principal_points);
+  inst.outline = pose.apply(model.outline);
+  inst.center = inst.points[0];
+  inst.angle = pose.angle;
+  inst.scale = pose.scale;
+}
+
+/// Fills an instance's geometry from a homography (the RANSAC baselines).
+void place(Instance& inst, const Model& model, const cv::Matx33d& h) {
+  cv::perspectiveTransform(model.principal_points, inst.points, cv::Mat(h));
+  cv::perspectiveTransform(model.outline, inst.outline, cv::Mat(h));
+  inst.center = inst.points[0];
+  const Similarity local = similarity_near(h, model.principal_points[0]);
+  inst.angle = local.angle;
+  inst.scale = local.scale;
+}
+
+/// What every method shares for one model: its matches, the keypoints on both sides and votes.
+struct ModelScene {
+  const Model& model;
+  int index;
+  const std::vector<cv::KeyPoint>& scene_keypoints;
+  std::vector<Match> matches;
+  std::vector<Vote> votes;
+  double bandwidth = 0.0;
+};
+
+std::vector<Cluster> centre_clusters(const ModelScene& ms) {
+  std::vector<cv::Point2f> centres;
+  centres.reserve(ms.votes.size());
+  for (const Vote& v : ms.votes)
+    centres.push_back(v.points[0]);
+  return mean_shift_clusters(centres, ms.bandwidth);
+}
+
+/// The paper's step 3-5: per principal point, the mode of the cluster's votes; then the
+/// similarity that best carries the model's principal points onto those modes.
+bool pose_from_principal_points(const ModelScene& ms, const std::vector<int>& members,
+                                bool allow_scale, Similarity& pose) {
+  const size_t n_points = ms.model.principal_points.size();
+  std::vector<cv::Point2f> modes(n_points);
+  std::vector<cv::Point2f> estimates(members.size());
+  for (size_t j = 0; j < n_points; ++j) {
+    cv::Point2d sum(0, 0);
+    for (size_t k = 0; k < members.size(); ++k) {
+      estimates[k] = ms.votes[members[k]].points[j];
+      sum += cv::Point2d(estimates[k].x, estimates[k].y);
+    }
+    const cv::Point2f mean(static_cast<float>(sum.x / members.size()),
+                           static_cast<float>(sum.y / members.size()));
+    modes[j] = mean_shift_mode(estimates, mean, ms.bandwidth);
+  }
+  if (n_points >= 2)
+    return fit_similarity(ms.model.principal_points, modes, allow_scale, pose);
+  // A single principal point fixes the position only: take the votes' median rotation/scale.
+  std::vector<float> angles, scales;
+  for (int i : members) {
+    angles.push_back(ms.votes[i].angle);
+    scales.push_back(ms.votes[i].scale);
+  }
+  std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+  std::nth_element(scales.begin(), scales.begin() + scales.size() / 2, scales.end());
+  pose.angle = angles[angles.size() / 2];
+  pose.scale = scales[scales.size() / 2];
+  const cv::Point2f at =
+      Similarity{pose.angle, pose.scale, {0, 0}}.apply(ms.model.principal_points[0]);
+  pose.translation = cv::Point2d(modes[0].x - at.x, modes[0].y - at.y);
+  return true;
+}
+
+/// Matches (indices into ms.matches, not yet claimed) consistent with a pose.
+std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, bool allow_scale,
+                            const std::vector<char>& claimed) {
+  const double tol = std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * pose.scale);
+  std::vector<int> in;
+  for (size_t i = 0; i < ms.matches.size(); ++i) {
+    if (claimed[i])
+      continue;
+    const Match& m = ms.matches[i];
+    const cv::Point2f predicted = pose.apply(ms.model.keypoints[m.model_point].pt);
+    const cv::Point2f seen = ms.scene_keypoints[m.scene_point].pt;
+    if (std::hypot(predicted.x - seen.x, predicted.y - seen.y) > tol)
+      continue;
+    if (angle_difference(ms.votes[i].angle, pose.angle) > kInlierAngleDeg)
+      continue;
+    if (allow_scale) {
+      const double r = ms.votes[i].scale / pose.scale;
+      if (r > kInlierScaleFactor || r < 1.0 / kInlierScaleFactor)
+        continue;
+    }
+    in.push_back(static_cast<int>(i));
+  }
+  return in;
+}
+
+/// Refits the pose on its own inlier matches until the inlier set settles.
+std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,
+                             const std::vector<char>& claimed) {
+  std::vector<int> in = inliers_of(ms, pose, allow_scale, claimed);
+  for (int round = 0; round < kRefineRounds && in.size() >= 2; ++round) {
+    std::vector<cv::Point2f> from, to;
+    for (int i : in) {
+      from.push_back(ms.model.keypoints[ms.matches[i].model_point].pt);
+      to.push_back(ms.scene_keypoints[ms.matches[i].scene_point].pt);
+    }
+    Similarity next;
+    if (!fit_similarity(from, to, allow_scale, next))
+      break;
+    std::vector<int> again = inliers_of(ms, next, allow_scale, claimed);
+    if (again.size() < 2)
+      break;
+    pose = next;
+    if (again == in)
+      break;
+    in = std::move(again);
+  }
+  return in;
+}
+
+std::vector<Instance> detect_voting(ModelScene& ms, const Settings& s) {
+  std::vector<Instance> found;
+  std::vector<char> claimed(ms.matches.size(), 0);
+  for (const Cluster& c : centre_clusters(ms)) {
+    if (static_cast<int>(c.members.size()) < s.min_matches)
+      break; // clusters come strongest first
+    Similarity pose;
+    if (!pose_from_principal_points(ms, c.members, s.allow_scale, pose))
+      continue;
+    int support = static_cast<int>(c.members.size());
+    if (s.refine) {
+      const std::vector<int> in = refine_pose(ms, pose, s.allow_scale, claimed);
+      if (static_cast<int>(in.size()) < s.min_matches)
+        continue;
+      for (int i : in)
+        claimed[i] = 1;
+      support = static_cast<int>(in.size());
+    }
+    Instance inst;
+    place(inst, ms.model, pose);
+    inst.matches = support;
+    found.push_back(std::move(inst));
+  }
+  return found;
+}
+
+std::vector<Match> subset(const std::vector<Match>& all, const std::vector<int>& idx) {
+  std::vector<Match> out;
+  out.reserve(idx.size());
+  for (int i : idx)
+    out.push_back(all[i]);
+  return out;
+}
+
+std::vector<Instance> detect_ransac(ModelScene& ms, const Settings& s, bool clustered) {
+  std::vector<Instance> found;
+  std::vector<std::vector<int>> groups;
+  if (clustered) {
+    for (const Cluster& c : centre_clusters(ms))
+      groups.push_back(c.members);
+  } else {
+    groups.emplace_back(ms.matches.size());
+    std::iota(groups.back().begin(), groups.back().end(), 0);
+  }
+  for (const std::vector<int>& g : groups) {
+    HomographyFit fit;
+    if (!fit_homography_ransac(subset(ms.matches, g), ms.model.keypoints, ms.scene_keypoints,
+                               s.ransac_reprojection_px, s.min_matches, fit))
+      continue;
+    Instance inst;
+    place(inst, ms.model, fit.homography);
+    inst.matches = static_cast<int>(fit.inliers.size());
+    found.push_back(std::move(inst));
+  }
+  return found;
+}
+
+bool finite_instance(const Instance& inst) {
+  auto ok = [](const cv::Point2f& p) { return std::isfinite(p.x) && std::isfinite(p.y); };
+  return std::all_of(inst.points.begin(), inst.points.end(), ok) &&
+         std::all_of(inst.outline.begin(), inst.outline.end(), ok) && std::isfinite(inst.angle) &&
+         std::isfinite(inst.scale);
+}
+
+} // namespace
+
+const char* method_name(Method method) {
+  switch (method) {
+  case Method::Voting:
+    return "voting";
+  case Method::RansacClustered:
+    return "ransac-clustered";
+  case Method::RansacAll:
+    return "ransac-all";
+  }
+  return "voting";
+}
+
+Method parse_method(const std::string& name) {
+  for (Method m : {Method::Voting, Method::RansacClustered, Method::RansacAll})
+    if (name == method_name(m))
+      return m;
+  throw Error("unknown method '" + name + "' (expected voting, ransac-clustered or ransac-all)");
+}
+
+Detector::Detector(std::vector<Model> models) : models_(std::move(models)) {
+  if (models_.empty())
+    throw Error("a detector needs at least one model");
+  for (const Model& m : models_)
+    if (m.keypoints.empty() || m.descriptors.rows != static_cast<int>(m.keypoints.size()) ||
+        m.principal_points.empty() || m.outline.size() < 3)
+      throw Error("model '" + m.name +
+                  "' is incomplete (no features, principal points or outline)");
+  matcher_ = Matcher(models_);
+}
+
+Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const {
+  if (!grey.empty() && grey.type() != CV_8UC1)
+    throw Error("frames must be 8-bit single-channel (grey) pictures");
+  Detection result;
+  if (grey.cols < kMinFrameSide || grey.rows < kMinFrameSide)
+    return result;
+  const auto t0 = Clock::now();
+  const Features scene = extract_features(grey);
+  const double features_ms = ms_since(t0);
+  result = detect(scene, grey.size(), settings);
+  result.timings.features_ms = features_ms;
+  return result;
+}
+
+Detection Detector::detect(const Features& scene, const cv::Size& frame_size,
+                           const Settings& s) const {
+  Detection result;
+  result.scene_keypoints = static_cast<int>(scene.keypoints.size());
+  auto t = Clock::now();
+  const std::vector<Match> matches = matcher_.match(scene.descriptors, s.ratio);
+  result.matches = static_cast<int>(matches.size());
+  result.timings.matching_ms = ms_since(t);
+
+  t = Clock::now();
+  for (size_t m = 0; m < models_.size(); ++m) {
+    ModelScene ms{models_[m], static_cast<int>(m), scene.keypoints, {}, {}, 0.0};
+    for (const Match& match : matches)
+      if (match.model == static_cast<int>(m))
+        ms.matches.push_back(match);
+    if (static_cast<int>(ms.matches.size()) < std::max(1, s.min_matches))
+      continue;
+    ms.votes = cast_votes(ms.matches, ms.model.keypoints, scene.keypoints,
+                          ms.model.principal_points, s.allow_scale);
+    ms.bandwidth = s.bandwidth > 0.0 ? s.bandwidth : kAutoBandwidthShare * model_side(ms.model);
+
+    std::vector<Instance> found;
+    switch (s.method) {
+    case Method::Voting:
+      found = detect_voting(ms, s);
+      break;
+    case Method::RansacClustered:
+      found = detect_ransac(ms, s, true);
+      break;
+    case Method::RansacAll:
+      found = detect_ransac(ms, s, false);
+      break;
+    }
+    for (Instance& inst : found) {
+      if (!finite_instance(inst))
+        continue;
+      inst.model = static_cast<int>(m);
+      inst.model_name = ms.model.name;
+      inst.score = score_for(inst.matches);
+      inst.grasp = inst.points[ms.model.grasp_point];
+      inst.grasp_angle = inst.angle;
+      result.instances.push_back(std::move(inst));
+    }
+  }
+  // Best first; the order depends only on the instances, never on timing.
+  std::stable_sort(result.instances.begin(), result.instances.end(),
+                   [](const Instance& a, const Instance& b) {
+                     if (a.score != b.score)
+                       return a.score > b.score;
+                     if (a.center.x != b.center.x)
+                       return a.center.x < b.center.x;
+                     return a.center.y < b.center.y;
+                   });
+  if (s.max_instances > 0 && static_cast<int>(result.instances.size()) > s.max_instances)
+    result.instances.resize(s.max_instances);
+  assess_occlusion(result.instances, frame_size);
+  result.timings.clustering_ms = ms_since(t);
+  return result;
+}
+
+} // namespace pickdetect

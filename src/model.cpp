@@ -1,0 +1,303 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// The model: picture, mask, principal points, outline, and the model file that stores them.
+#include <pickdetect/error.hpp>
+#include <pickdetect/features.hpp>
+#include <pickdetect/model.hpp>
+
+#include <opencv2/core/persistence.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace fs = std::filesystem;
+
+namespace pickdetect {
+namespace {
+
+/// Longest side of a model picture: beyond this SIFT's cost and memory are out of proportion to
+/// what a model needs, and such a picture is almost surely not meant as a model.
+constexpr int kMaxModelSide = 4096;
+/// Largest distance (pixels) between the alpha contour and its simplified outline.
+constexpr double kOutlineTolerancePx = 1.0;
+
+std::string in_quotes(const std::string& path) {
+  return "'" + path + "'";
+}
+
+/// Throws an Error naming the file when it cannot be opened for reading.
+void require_readable(const std::string& path, const char* what) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec))
+    throw Error(std::string(what) + " " + in_quotes(path) + " is a directory, not a file");
+  std::ifstream probe(path, std::ios::binary);
+  if (!probe) {
+    const int err = errno;
+    throw Error(std::string(what) + " " + in_quotes(path) +
+                " cannot be opened: " + std::strerror(err ? err : ENOENT));
+  }
+}
+
+bool is_model_file(const std::string& path) {
+  std::string ext = fs::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".gz")
+    return is_model_file(fs::path(path).replace_extension().string());
+  return ext == ".yml" || ext == ".yaml" || ext == ".xml" || ext == ".json";
+}
+
+void load_picture(Model& model) {
+  require_readable(model.image_path, "model picture");
+  cv::Mat raw = cv::imread(model.image_path, cv::IMREAD_UNCHANGED);
+  if (raw.empty())
+    throw Error("model picture " + in_quotes(model.image_path) +
+                " cannot be decoded as a picture (unknown or corrupt format)");
+  if (raw.cols > kMaxModelSide || raw.rows > kMaxModelSide)
+    throw Error("model picture " + in_quotes(model.image_path) + " is " + std::to_string(raw.cols) +
+                "x" + std::to_string(raw.rows) + " pixels, larger than the " +
+                std::to_string(kMaxModelSide) + "-pixel side a model may have");
+  if (raw.depth() != CV_8U) {
+    double lo = 0, hi = 0;
+    cv::minMaxLoc(raw.reshape(1), &lo, &hi);
+    raw.convertTo(raw, CV_8U, raw.depth() == CV_16U ? 1.0 / 257.0 : (hi > 1.0 ? 1.0 : 255.0));
+  }
+  cv::Mat alpha;
+  switch (raw.channels()) {
+  case 1:
+    model.image = raw;
+    break;
+  case 3:
+    cv::cvtColor(raw, model.image, cv::COLOR_BGR2GRAY);
+    break;
+  case 4:
+    cv::cvtColor(raw, model.image, cv::COLOR_BGRA2GRAY);
+    cv::extractChannel(raw, alpha, 3);
+    break;
+  default:
+    throw Error("model picture " + in_quotes(model.image_path) + " has " +
+                std::to_string(raw.channels()) + " channels; expected 1, 3 or 4");
+  }
+  if (alpha.empty()) {
+    model.mask = cv::Mat(model.image.size(), CV_8UC1, cv::Scalar(255));
+  } else {
+    model.mask = alpha > 0;
+    if (cv::countNonZero(model.mask) == 0)
+      throw Error("model picture " + in_quotes(model.image_path) +
+                  " is fully transparent: its alpha marks no object");
+  }
+}
+
+cv::Rect2f object_box(const Model& model) {
+  cv::Rect box = cv::boundingRect(model.mask);
+  return cv::Rect2f(box);
+}
+
+std::vector<cv::Point2f> default_principal_points(const Model& model) {
+  const cv::Rect2f b = object_box(model);
+  return {{b.x + b.width / 2.f, b.y + b.height / 2.f},
+          {b.x, b.y},
+          {b.x + b.width, b.y},
+          {b.x + b.width, b.y + b.height},
+          {b.x, b.y + b.height}};
+}
+
+std::vector<cv::Point2f> default_outline(const Model& model) {
+  const bool whole = cv::countNonZero(model.mask) == model.mask.rows * model.mask.cols;
+  if (!whole) {
+    std::vector<std::vector<cv::Point>> contours;
+    cv::findContours(model.mask.clone(), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+    auto largest = std::max_element(contours.begin(), contours.end(), [](auto& a, auto& b) {
+      return cv::contourArea(a) < cv::contourArea(b);
+    });
+    if (largest != contours.end() && largest->size() >= 3) {
+      std::vector<cv::Point> simple;
+      cv::approxPolyDP(*largest, simple, kOutlineTolerancePx, true);
+      if (simple.size() >= 3)
+        return std::vector<cv::Point2f>(simple.begin(), simple.end());
+    }
+  }
+  const float w = static_cast<float>(model.image.cols), h = static_cast<float>(model.image.rows);
+  return {{0.f, 0.f}, {w, 0.f}, {w, h}, {0.f, h}};
+}
+
+std::vector<cv::Point2f> read_points(const cv::FileNode& node, const std::string& path,
+                                     const char* key) {
+  std::vector<cv::Point2f> points;
+  if (node.empty() || node.isNone())
+    return points;
+  if (!node.isSeq())
+    throw Error("model file " + in_quotes(path) + ": '" + key + "' must be a list of [x, y] pairs");
+  for (const cv::FileNode& item : node) {
+    auto number = [](const cv::FileNode& n) { return n.isReal() || n.isInt(); };
+    if (!item.isSeq() || item.size() != 2 || !number(item[0]) || !number(item[1]))
+      throw Error("model file " + in_quotes(path) + ": '" + key +
+                  "' must be a list of [x, y] pairs of numbers");
+    const double x = static_cast<double>(item[0]), y = static_cast<double>(item[1]);
+    if (!std::isfinite(x) || !std::isfinite(y))
+      throw Error("model file " + in_quotes(path) + ": '" + key + "' holds a non-finite number");
+    points.emplace_back(static_cast<float>(x), static_cast<float>(y));
+  }
+  return points;
+}
+
+void check_geometry(const Model& model, const std::string& origin) {
+  const float w = static_cast<float>(model.image.cols), h = static_cast<float>(model.image.rows);
+  if (model.principal_points.empty())
+    throw Error(origin + ": no principal points (the first one must be the object centre)");
+  for (size_t i = 0; i < model.principal_points.size(); ++i) {
+    const cv::Point2f p = model.principal_points[i];
+    if (p.x < 0.f || p.y < 0.f || p.x > w || p.y > h)
+      throw Error(origin + ": principal point " + std::to_string(i) + " (" + std::to_string(p.x) +
+                  ", " + std::to_string(p.y) + ") lies outside the " +
+                  std::to_string(model.image.cols) + "x" + std::to_string(model.image.rows) +
+                  " model picture");
+  }
+  if (model.outline.size() < 3)
+    throw Error(origin + ": the outline needs at least 3 points, it has " +
+                std::to_string(model.outline.size()));
+  if (std::abs(cv::contourArea(model.outline)) < 1.0)
+    throw Error(origin + ": the outline encloses no area");
+  if (model.grasp_point < 0 || model.grasp_point >= static_cast<int>(model.principal_points.size()))
+    throw Error(origin + ": grasp_point " + std::to_string(model.grasp_point) +
+                " is not the index of a principal point (there are " +
+                std::to_string(model.principal_points.size()) + ")");
+}
+
+} // namespace
+
+void compute_model_features(Model& model) {
+  Features f = extract_features(model.image, model.mask);
+  if (static_cast<int>(f.keypoints.size()) < kMinModelKeypoints)
+    throw Error("model picture " + in_quotes(model.image_path) + " yields only " +
+                std::to_string(f.keypoints.size()) + " SIFT keypoints (at least " +
+                std::to_string(kMinModelKeypoints) + " are needed): it has too little texture");
+  model.keypoints = std::move(f.keypoints);
+  model.descriptors = std::move(f.descriptors);
+}
+
+Model model_from_picture(const std::string& picture_path, const std::string& name) {
+  Model model;
+  model.image_path = picture_path;
+  model.name = name.empty() ? fs::path(picture_path).stem().string() : name;
+  load_picture(model);
+  model.principal_points = default_principal_points(model);
+  model.outline = default_outline(model);
+  compute_model_features(model);
+  return model;
+}
+
+Model load_model(const std::string& path) {
+  if (path.empty())
+    throw Error("no model file given");
+  if (!is_model_file(path))
+    return model_from_picture(path);
+
+  require_readable(path, "model file");
+  const std::string origin = "model file " + in_quotes(path);
+  cv::FileStorage store;
+  try {
+    if (!store.open(path, cv::FileStorage::READ))
+      throw Error(origin + " cannot be parsed");
+  } catch (const cv::Exception& e) {
+    throw Error(origin + " is not valid YAML/XML/JSON: " + e.err);
+  }
+  try {
+    const cv::FileNode root = store.root();
+    if (!root.isMap() || root["image"].empty())
+      throw Error(origin + ": the 'image' key (path of the model picture) is missing");
+    if (!root["image"].isString())
+      throw Error(origin + ": 'image' must be a string (path of the model picture)");
+
+    Model model;
+    fs::path image = static_cast<std::string>(root["image"]);
+    if (image.is_relative())
+      image = fs::path(path).parent_path() / image;
+    model.image_path = image.lexically_normal().string();
+    model.name = root["name"].isString() ? static_cast<std::string>(root["name"])
+                                         : fs::path(path).stem().string();
+    try {
+      load_picture(model);
+    } catch (const Error& e) {
+      throw Error(origin + ": " + e.what());
+    }
+    model.principal_points = read_points(root["principal_points"], path, "principal_points");
+    if (model.principal_points.empty())
+      model.principal_points = default_principal_points(model);
+    if (!root["outline"].empty()) {
+      model.outline = read_points(root["outline"], path, "outline");
+      if (model.outline.empty())
+        throw Error(origin + ": 'outline' is empty");
+    } else {
+      model.outline = default_outline(model);
+    }
+    if (!root["grasp_point"].empty()) {
+      if (!root["grasp_point"].isInt())
+        throw Error(origin + ": 'grasp_point' must be the index of a principal point");
+      model.grasp_point = static_cast<int>(root["grasp_point"]);
+    }
+    check_geometry(model, origin);
+
+    if (!root["keypoints"].empty() && !root["descriptors"].empty()) {
+      cv::read(root["keypoints"], model.keypoints);
+      root["descriptors"] >> model.descriptors;
+      if (model.descriptors.type() != CV_32F ||
+          model.descriptors.rows != static_cast<int>(model.keypoints.size()) ||
+          model.descriptors.cols != 128)
+        throw Error(origin + ": the cached keypoints and descriptors do not agree (" +
+                    std::to_string(model.keypoints.size()) + " keypoints, " +
+                    std::to_string(model.descriptors.rows) + "x" +
+                    std::to_string(model.descriptors.cols) + " descriptors)");
+      if (static_cast<int>(model.keypoints.size()) < kMinModelKeypoints)
+        throw Error(origin + ": the cache holds only " + std::to_string(model.keypoints.size()) +
+                    " keypoints (at least " + std::to_string(kMinModelKeypoints) + " are needed)");
+    } else {
+      try {
+        compute_model_features(model);
+      } catch (const Error& e) {
+        throw Error(origin + ": " + e.what());
+      }
+    }
+    return model;
+  } catch (const cv::Exception& e) {
+    throw Error(origin + " is not a valid model file: " + e.err);
+  }
+}
+
+void save_model(const Model& model, const std::string& path, bool cache_features) {
+  cv::FileStorage store;
+  try {
+    store.open(path, cv::FileStorage::WRITE);
+  } catch (const cv::Exception& e) {
+    throw Error("model file " + in_quotes(path) + " cannot be written: " + e.err);
+  }
+  if (!store.isOpened())
+    throw Error("model file " + in_quotes(path) + " cannot be written");
+
+  const fs::path folder = fs::absolute(path).parent_path();
+  const fs::path image = fs::absolute(model.image_path);
+  const fs::path relative = image.lexically_relative(folder);
+  const bool below = !relative.empty() && *relative.begin() != "..";
+  store << "name" << model.name;
+  store << "image" << (below ? relative.string() : image.string());
+  auto write_points = [&](const char* key, const std::vector<cv::Point2f>& points) {
+    store << key << "[";
+    for (const cv::Point2f& p : points)
+      store << "[:" << p.x << p.y << "]";
+    store << "]";
+  };
+  write_points("principal_points", model.principal_points);
+  write_points("outline", model.outline);
+  store << "grasp_point" << model.grasp_point;
+  if (cache_features && !model.keypoints.empty()) {
+    cv::write(store, "keypoints", model.keypoints);
+    store << "descriptors" << model.descriptors;
+  }
+}
+
+} // namespace pickdetect

@@ -1,0 +1,224 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// The detector on scenes built from OpenCV's box.png at known poses.
+#include "../common/scene.hpp"
+
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+#include <sstream>
+
+using namespace pickdetect;
+using pickdetect::test_scene::Pose;
+
+namespace {
+
+const std::string kData = PICKDETECT_TEST_DATA;
+
+const Model& box_model() {
+  static const Model model = load_model(kData + "/box.png");
+  return model;
+}
+
+const Detector& box_detector() {
+  static const Detector detector({box_model()});
+  return detector;
+}
+
+cv::Mat box_picture() {
+  return cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
+}
+
+double distance(cv::Point2f a, cv::Point2f b) {
+  return std::hypot(a.x - b.x, a.y - b.y);
+}
+
+std::string describe(const std::vector<Instance>& found) {
+  std::ostringstream out;
+  for (const Instance& i : found)
+    out << " (" << i.center.x << ", " << i.center.y << ", " << i.angle << " deg, " << i.matches
+        << " matches)";
+  return found.empty() ? " none" : out.str();
+}
+
+/// The detection nearest to `truth`, or nullptr.
+const Instance* nearest(const std::vector<Instance>& found, cv::Point2f truth) {
+  const Instance* best = nullptr;
+  for (const Instance& i : found)
+    if (!best || distance(i.center, truth) < distance(best->center, truth))
+      best = &i;
+  return best;
+}
+
+void expect_found(const std::vector<Instance>& found, const Pose& pose, double tolerance_px) {
+  const Instance* hit = nearest(found, pose.center);
+  ASSERT_NE(hit, nullptr) << "expected an instance at (" << pose.center.x << ", " << pose.center.y
+                          << "), found none";
+  EXPECT_LE(distance(hit->center, pose.center), tolerance_px)
+      << "expected centre (" << pose.center.x << ", " << pose.center.y << "), got ("
+      << hit->center.x << ", " << hit->center.y << ")";
+  EXPECT_LE(angle_difference(hit->angle, pose.angle), 2.0)
+      << "expected angle " << pose.angle << ", got " << hit->angle;
+  EXPECT_NEAR(hit->scale, pose.scale, 0.03);
+}
+
+} // namespace
+
+TEST(Detector, FindsOneToEightSeparateInstancesAtRandomAngles) {
+  const cv::Mat picture = box_picture();
+  const cv::Size frame(1320, 990);
+  cv::RNG rng(2024);
+  for (int n = 1; n <= 8; ++n) {
+    // Cells of 330 px hold one box at scale 0.8 (diagonal 315 px) whatever its angle.
+    std::vector<Pose> poses;
+    for (int k = 0; k < n; ++k) {
+      const int cx = k % 4, cy = k / 4;
+      poses.push_back({{165.f + 330.f * cx + rng.uniform(-4.f, 4.f),
+                        165.f + 330.f * cy + rng.uniform(-4.f, 4.f)},
+                       rng.uniform(0.0, 360.0),
+                       0.8 + rng.uniform(-0.03, 0.03)});
+    }
+    cv::Mat scene = test_scene::plain_background(frame, 110, n);
+    test_scene::paste(scene, picture, poses);
+    const Detection d = box_detector().detect(scene);
+    EXPECT_EQ(d.instances.size(), poses.size())
+        << n << " boxes placed, found:" << describe(d.instances);
+    for (const Pose& p : poses)
+      expect_found(d.instances, p, 1.5);
+  }
+}
+
+TEST(Detector, OverlappingInstancesComeOutSeparately) {
+  const cv::Mat picture = box_picture();
+  // The second box lies over a third of the first one.
+  const std::vector<Pose> poses = {{{300.f, 260.f}, 20.0, 1.0}, {{460.f, 330.f}, 115.0, 1.0}};
+  cv::Mat scene = test_scene::plain_background({800, 600});
+  test_scene::paste(scene, picture, poses);
+  const Detection d = box_detector().detect(scene);
+  ASSERT_EQ(d.instances.size(), 2u) << "found:" << describe(d.instances);
+  for (const Pose& p : poses)
+    expect_found(d.instances, p, 1.5);
+  for (const Instance& i : d.instances)
+    EXPECT_FALSE(i.pickable) << "overlapping instances must not be pickable";
+}
+
+TEST(Detector, SeparateInstancesArePickableInScoreOrder) {
+  const cv::Mat picture = box_picture();
+  const std::vector<Pose> poses = {{{220.f, 220.f}, 0.0, 1.0}, {{600.f, 380.f}, 200.0, 1.0}};
+  cv::Mat scene = test_scene::plain_background({800, 600});
+  test_scene::paste(scene, picture, poses);
+  const Detection d = box_detector().detect(scene);
+  ASSERT_EQ(d.instances.size(), 2u) << "found:" << describe(d.instances);
+  EXPECT_TRUE(d.instances[0].pickable && d.instances[1].pickable);
+  EXPECT_EQ(d.instances[0].pick_order + d.instances[1].pick_order, 3);
+  EXPECT_GE(d.instances[0].score, d.instances[1].score);
+  EXPECT_EQ(d.instances[0].pick_order, 1);
+}
+
+TEST(Detector, EmptyFrameGivesNoInstance) {
+  const Detection d = box_detector().detect(test_scene::plain_background({640, 480}));
+  EXPECT_TRUE(d.instances.empty()) << "found:" << describe(d.instances);
+  const cv::Mat black = cv::Mat::zeros(480, 640, CV_8UC1);
+  EXPECT_TRUE(box_detector().detect(black).instances.empty());
+}
+
+TEST(Detector, FrameOfAnotherTextureGivesNoInstance) {
+  for (const char* name : {"graf1.png", "baboon.jpg", "building.jpg"}) {
+    const cv::Mat other = cv::imread(kData + "/" + name, cv::IMREAD_GRAYSCALE);
+    ASSERT_FALSE(other.empty()) << name;
+    for (Method m : {Method::Voting, Method::RansacClustered}) {
+      Settings s;
+      s.method = m;
+      const Detection d = box_detector().detect(other, s);
+      EXPECT_TRUE(d.instances.empty())
+          << name << " with " << method_name(m) << " found:" << describe(d.instances);
+    }
+  }
+}
+
+TEST(Detector, TinyFramesGiveNoInstance) {
+  for (cv::Size size : {cv::Size(1, 1), cv::Size(7, 5), cv::Size(15, 40)})
+    EXPECT_TRUE(box_detector().detect(cv::Mat(size, CV_8UC1, cv::Scalar(128))).instances.empty());
+}
+
+TEST(Detector, RefusesColourFrames) {
+  EXPECT_THROW(box_detector().detect(cv::Mat(100, 100, CV_8UC3)), Error);
+}
+
+TEST(Detector, SameFrameGivesTheSameResultEveryRun) {
+  const cv::Mat picture = box_picture();
+  cv::Mat scene = test_scene::plain_background({900, 700});
+  test_scene::paste(
+      scene, picture,
+      {{{250.f, 250.f}, 33.0, 1.0}, {{420.f, 330.f}, 290.0, 0.95}, {{650.f, 480.f}, 170.0, 1.05}});
+  const Detector other({box_model()});
+  for (Method m : {Method::Voting, Method::RansacClustered, Method::RansacAll}) {
+    Settings s;
+    s.method = m;
+    const Detection a = box_detector().detect(scene, s);
+    for (int run = 0; run < 3; ++run) {
+      const Detection b = (run % 2 ? other : box_detector()).detect(scene, s);
+      ASSERT_EQ(a.instances.size(), b.instances.size()) << method_name(m);
+      for (size_t i = 0; i < a.instances.size(); ++i) {
+        EXPECT_EQ(a.instances[i].center, b.instances[i].center) << method_name(m);
+        EXPECT_EQ(a.instances[i].points, b.instances[i].points) << method_name(m);
+        EXPECT_EQ(a.instances[i].matches, b.instances[i].matches) << method_name(m);
+      }
+    }
+  }
+}
+
+TEST(Detector, FindsTheBoxInOpenCVsRealScene) {
+  // OpenCV's box_in_scene.png: the box is tilted out of the picture plane and partly hidden.
+  // Its corners, read off the photograph: the centre lies near (187.0, 223.9).
+  const cv::Mat scene = cv::imread(kData + "/box_in_scene.png", cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(scene.empty());
+  const Detection d = box_detector().detect(scene);
+  ASSERT_EQ(d.instances.size(), 1u) << "found:" << describe(d.instances);
+  EXPECT_LE(distance(d.instances[0].center, {187.04f, 223.9f}), 5.0)
+      << "got (" << d.instances[0].center.x << ", " << d.instances[0].center.y << ")";
+}
+
+TEST(Detector, RansacAllFindsOneInstanceAndRansacClusteredFindsEach) {
+  const cv::Mat picture = box_picture();
+  const std::vector<Pose> poses = {{{220.f, 220.f}, 10.0, 1.0}, {{620.f, 420.f}, 250.0, 1.0}};
+  cv::Mat scene = test_scene::plain_background({850, 650});
+  test_scene::paste(scene, picture, poses);
+  Settings s;
+  s.method = Method::RansacAll;
+  EXPECT_EQ(box_detector().detect(scene, s).instances.size(), 1u);
+  s.method = Method::RansacClustered;
+  const Detection d = box_detector().detect(scene, s);
+  ASSERT_EQ(d.instances.size(), 2u) << "found:" << describe(d.instances);
+  for (const Pose& p : poses)
+    expect_found(d.instances, p, 3.0);
+}
+
+TEST(Detector, WithoutAllowScaleTheScaleStaysOne) {
+  const cv::Mat picture = box_picture();
+  cv::Mat scene = test_scene::plain_background({700, 600});
+  test_scene::paste(scene, picture, {{{330.f, 300.f}, 75.0, 1.0}});
+  Settings s;
+  s.allow_scale = false;
+  const Detection d = box_detector().detect(scene, s);
+  ASSERT_EQ(d.instances.size(), 1u);
+  EXPECT_DOUBLE_EQ(d.instances[0].scale, 1.0);
+  expect_found(d.instances, {{330.f, 300.f}, 75.0, 1.0}, 1.5);
+}
+
+TEST(Detector, MaxInstancesKeepsTheBest) {
+  const cv::Mat picture = box_picture();
+  cv::Mat scene = test_scene::plain_background({900, 500});
+  test_scene::paste(scene, picture, {{{220.f, 240.f}, 0.0, 1.0}, {{650.f, 240.f}, 90.0, 1.0}});
+  Settings s;
+  s.max_instances = 1;
+  EXPECT_EQ(box_detector().detect(scene, s).instances.size(), 1u);
+}
+
+TEST(Method, NamesRoundTripAndUnknownNamesAreRefused) {
+  for (Method m : {Method::Voting, Method::RansacClustered, Method::RansacAll})
+    EXPECT_EQ(parse_method(method_name(m)), m);
+  EXPECT_THROW(parse_method("hough"), Error);
+}

@@ -1,0 +1,151 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// The building blocks: votes, mean shift, similarity fits, RANSAC, occlusion.
+#include "../common/scene.hpp"
+
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+
+using namespace pickdetect;
+
+TEST(MeanShift, SeparatesTwoBlobsAndLeavesFarOutliersAlone) {
+  std::vector<cv::Point2f> pts;
+  cv::RNG rng(3);
+  for (int i = 0; i < 40; ++i)
+    pts.emplace_back(100.f + rng.gaussian(2.0), 100.f + rng.gaussian(2.0));
+  for (int i = 0; i < 25; ++i)
+    pts.emplace_back(160.f + rng.gaussian(2.0), 120.f + rng.gaussian(2.0));
+  pts.emplace_back(600.f, 600.f);
+  const std::vector<Cluster> c = mean_shift_clusters(pts, 15.0);
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c[0].members.size(), 40u);
+  EXPECT_EQ(c[1].members.size(), 25u);
+  EXPECT_NEAR(c[0].mode.x, 100.f, 1.0);
+  EXPECT_NEAR(c[1].mode.x, 160.f, 1.0);
+  EXPECT_EQ(c[2].members, std::vector<int>{65});
+}
+
+TEST(MeanShift, ModeIgnoresVotesOutsideTheWindow) {
+  std::vector<cv::Point2f> pts = {{10, 10}, {11, 10}, {10, 11}, {11, 11}, {80, 80}};
+  const cv::Point2f mode = mean_shift_mode(pts, {24.4f, 24.4f}, 20.0);
+  EXPECT_NEAR(mode.x, 10.5f, 1e-4);
+  EXPECT_NEAR(mode.y, 10.5f, 1e-4);
+}
+
+TEST(Pose, FitSimilarityRecoversAKnownTransform) {
+  const Similarity truth{37.0, 1.2, {50.0, -20.0}};
+  const std::vector<cv::Point2f> from = {{0, 0}, {100, 0}, {100, 60}, {0, 60}, {40, 30}};
+  Similarity fit;
+  ASSERT_TRUE(fit_similarity(from, truth.apply(from), true, fit));
+  EXPECT_NEAR(fit.angle, 37.0, 1e-6);
+  EXPECT_NEAR(fit.scale, 1.2, 1e-6); // float points
+  EXPECT_NEAR(fit.translation.x, 50.0, 1e-6);
+  ASSERT_TRUE(fit_similarity(from, truth.apply(from), false, fit));
+  EXPECT_DOUBLE_EQ(fit.scale, 1.0);
+  EXPECT_FALSE(fit_similarity({{1, 1}, {1, 1}}, {{2, 2}, {3, 3}}, true, fit));
+}
+
+TEST(Pose, PositiveAnglesTurnClockwiseOnScreen) {
+  // With y down, turning the x axis by +90 degrees points it down the screen.
+  const cv::Point2f p = Similarity{90.0, 1.0, {0.0, 0.0}}.apply(cv::Point2f(1.f, 0.f));
+  EXPECT_NEAR(p.x, 0.f, 1e-6);
+  EXPECT_NEAR(p.y, 1.f, 1e-6);
+  EXPECT_DOUBLE_EQ(angle_difference(350.0, 10.0), 20.0);
+}
+
+TEST(Pose, SimilarityNearAHomographyMatchesItsAffinePart) {
+  const Similarity s{120.0, 0.9, {300.0, 200.0}};
+  const double r = s.angle * CV_PI / 180.0;
+  const cv::Matx33d h(s.scale * std::cos(r), -s.scale * std::sin(r), s.translation.x,
+                      s.scale * std::sin(r), s.scale * std::cos(r), s.translation.y, 0, 0, 1);
+  const Similarity near = similarity_near(h, {20.f, 30.f});
+  EXPECT_NEAR(near.angle, 120.0, 1e-6);
+  EXPECT_NEAR(near.scale, 0.9, 1e-9);
+  EXPECT_NEAR(near.translation.x, 300.0, 1e-4);
+}
+
+TEST(Voting, VotesCarryPrincipalPointsThroughTheKeypointPose) {
+  // A model keypoint at (10, 0) with angle 0 seen at (100, 100), turned 90 degrees, twice as big.
+  const std::vector<cv::KeyPoint> model = {cv::KeyPoint(10.f, 0.f, 4.f, 0.f)};
+  const std::vector<cv::KeyPoint> scene = {cv::KeyPoint(100.f, 100.f, 8.f, 90.f)};
+  const std::vector<Match> matches = {Match{0, 0, 0, 1.f, 0.5f}};
+  const std::vector<cv::Point2f> pp = {{0.f, 0.f}, {10.f, 5.f}};
+  std::vector<Vote> v = cast_votes(matches, model, scene, pp, true);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_FLOAT_EQ(v[0].angle, 90.f);
+  EXPECT_FLOAT_EQ(v[0].scale, 2.f);
+  // (0,0) is 10 px left of the keypoint: turned 90 degrees and doubled, 20 px above it.
+  EXPECT_NEAR(v[0].points[0].x, 100.f, 1e-4);
+  EXPECT_NEAR(v[0].points[0].y, 80.f, 1e-4);
+  EXPECT_NEAR(v[0].points[1].x, 90.f, 1e-4);
+  EXPECT_NEAR(v[0].points[1].y, 100.f, 1e-4);
+  v = cast_votes(matches, model, scene, pp, false);
+  EXPECT_FLOAT_EQ(v[0].scale, 1.f);
+  EXPECT_NEAR(v[0].points[0].y, 90.f, 1e-4);
+}
+
+TEST(Voting, SiftAnglesFollowTheSceneRotation) {
+  // SIFT's own keypoint angles must grow with a clockwise turn on screen, as votes assume.
+  const cv::Mat box =
+      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/box.png", cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(box.empty());
+  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  cv::Mat scene = test_scene::plain_background({600, 600});
+  test_scene::paste(scene, box, {{{300.f, 300.f}, 40.0, 1.0}});
+  const Features f = extract_features(scene);
+  const std::vector<Match> matches = Matcher({model}).match(f.descriptors, 0.7);
+  ASSERT_GE(matches.size(), 20u);
+  const std::vector<Vote> votes =
+      cast_votes(matches, model.keypoints, f.keypoints, model.principal_points, true);
+  int near_truth = 0;
+  for (const Vote& v : votes)
+    near_truth += angle_difference(v.angle, 40.0) < 10.0 &&
+                  std::hypot(v.points[0].x - 300.f, v.points[0].y - 300.f) < 15.f;
+  EXPECT_GT(near_truth, static_cast<int>(votes.size()) * 3 / 4);
+}
+
+TEST(Matcher, AFeatureThatFitsTwoModelsEquallyDecidesForNeither) {
+  const Model a = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  Model twin = a;
+  twin.name = "twin";
+  const Features scene = [&] {
+    Features f;
+    f.keypoints = a.keypoints;
+    f.descriptors = a.descriptors.clone();
+    return f;
+  }();
+  EXPECT_GT(Matcher({a}).match(scene.descriptors, 0.8).size(), a.keypoints.size() / 2);
+  EXPECT_TRUE(Matcher({a, twin}).match(scene.descriptors, 0.8).empty());
+}
+
+TEST(Occlusion, OverlapTouchAndFrame) {
+  const std::vector<cv::Point2f> a = {{0, 0}, {100, 0}, {100, 100}, {0, 100}};
+  const std::vector<cv::Point2f> b = {{50, 50}, {150, 50}, {150, 150}, {50, 150}};
+  const std::vector<cv::Point2f> touching = {{100, 0}, {200, 0}, {200, 100}, {100, 100}};
+  EXPECT_NEAR(overlap_area(a, b), 2500.0, 1e-3);
+  EXPECT_NEAR(overlap_area(a, touching), 0.0, 1e-3);
+
+  std::vector<Instance> inst(3);
+  inst[0].outline = a;
+  inst[0].score = 0.9;
+  inst[1].outline = touching;
+  inst[1].score = 0.95;
+  inst[2].outline = {{300, 300}, {500, 300}, {500, 500}, {300, 500}};
+  inst[2].score = 0.5;
+  assess_occlusion(inst, {400, 400});
+  EXPECT_TRUE(inst[0].pickable);
+  EXPECT_TRUE(inst[1].pickable);
+  EXPECT_EQ(inst[1].pick_order, 1);
+  EXPECT_EQ(inst[0].pick_order, 2);
+  EXPECT_NEAR(inst[2].visibility, 0.25, 1e-6);
+
+  inst[1].outline = b;
+  assess_occlusion(inst, {400, 400});
+  EXPECT_FALSE(inst[0].pickable);
+  EXPECT_FALSE(inst[1].pickable);
+  EXPECT_EQ(inst[0].pick_order, 0);
+  EXPECT_EQ(inst[2].pick_order, 1);
+}

@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Models: pictures, alpha outlines, default principal points, model files and their errors.
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+using namespace pickdetect;
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kData = PICKDETECT_TEST_DATA;
+
+/// A fresh folder per test, removed afterwards.
+class ModelFiles : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("pickdetect-model-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+    return path(name);
+  }
+  /// Expects load_model to throw an Error whose message contains every fragment.
+  static void expect_refused(const std::string& file,
+                             std::initializer_list<std::string> fragments) {
+    try {
+      load_model(file);
+      ADD_FAILURE() << "loading " << file << " should have failed";
+    } catch (const Error& e) {
+      for (const std::string& f : fragments)
+        EXPECT_NE(std::string(e.what()).find(f), std::string::npos)
+            << "message '" << e.what() << "' should mention '" << f << "'";
+    }
+  }
+  fs::path dir_;
+};
+
+} // namespace
+
+TEST(Model, PlainPictureGetsTheCentreAndCornersAndItsRectangle) {
+  const Model m = load_model(kData + "/box.png");
+  EXPECT_EQ(m.name, "box");
+  ASSERT_EQ(m.principal_points.size(), 5u);
+  EXPECT_EQ(m.principal_points[0], cv::Point2f(162.f, 111.5f));
+  EXPECT_EQ(m.principal_points[1], cv::Point2f(0.f, 0.f));
+  EXPECT_EQ(m.principal_points[3], cv::Point2f(324.f, 223.f));
+  ASSERT_EQ(m.outline.size(), 4u);
+  EXPECT_EQ(m.outline[2], cv::Point2f(324.f, 223.f));
+  EXPECT_GE(static_cast<int>(m.keypoints.size()), kMinModelKeypoints);
+  EXPECT_EQ(m.descriptors.rows, static_cast<int>(m.keypoints.size()));
+}
+
+TEST_F(ModelFiles, AlphaMarksTheObjectAndGivesItsOutline) {
+  // The box picture inside a larger transparent canvas, as a disc-cornered shape.
+  const cv::Mat box = cv::imread(kData + "/box.png", cv::IMREAD_COLOR);
+  cv::Mat rgba(box.rows + 40, box.cols + 60, CV_8UC4, cv::Scalar(0, 0, 0, 0));
+  cv::Mat inner;
+  cv::cvtColor(box, inner, cv::COLOR_BGR2BGRA);
+  inner.copyTo(rgba(cv::Rect(30, 20, box.cols, box.rows)));
+  cv::imwrite(path("boxed.png"), rgba);
+
+  const Model m = load_model(path("boxed.png"));
+  EXPECT_EQ(m.principal_points[0], cv::Point2f(30.f + box.cols / 2.f, 20.f + box.rows / 2.f));
+  EXPECT_EQ(m.principal_points[1], cv::Point2f(30.f, 20.f));
+  const cv::Rect outline_box = cv::boundingRect(m.outline);
+  EXPECT_NEAR(outline_box.x, 30, 1);
+  EXPECT_NEAR(outline_box.y, 20, 1);
+  EXPECT_NEAR(outline_box.width, box.cols, 2);
+  EXPECT_EQ(cv::countNonZero(m.mask), box.cols * box.rows);
+  for (const cv::KeyPoint& k : m.keypoints)
+    EXPECT_TRUE(cv::Rect(28, 18, box.cols + 4, box.rows + 4).contains(k.pt))
+        << "keypoint outside the object at (" << k.pt.x << ", " << k.pt.y << ")";
+}
+
+TEST_F(ModelFiles, TexturelessPictureIsRefusedWithTheCount) {
+  cv::imwrite(path("flat.png"), cv::Mat(200, 300, CV_8UC1, cv::Scalar(90)));
+  expect_refused(path("flat.png"), {path("flat.png"), "yields only 0", "keypoints"});
+}
+
+TEST_F(ModelFiles, ModelFileRoundTripsWithCachedFeatures) {
+  Model m = load_model(kData + "/box.png");
+  m.name = "cereal";
+  m.principal_points = {{162.f, 111.5f}, {40.f, 50.f}, {280.f, 170.f}};
+  m.grasp_point = 2;
+  save_model(m, path("cereal.yml"), true);
+  const Model back = load_model(path("cereal.yml"));
+  EXPECT_EQ(back.name, "cereal");
+  EXPECT_EQ(back.principal_points, m.principal_points);
+  EXPECT_EQ(back.outline, m.outline);
+  EXPECT_EQ(back.grasp_point, 2);
+  ASSERT_EQ(back.keypoints.size(), m.keypoints.size());
+  EXPECT_EQ(cv::norm(back.descriptors, m.descriptors, cv::NORM_INF), 0.0);
+  EXPECT_EQ(back.keypoints[5].pt, m.keypoints[5].pt);
+}
+
+TEST_F(ModelFiles, ModelFileWithoutCacheComputesFeatures) {
+  const std::string file = write("plain.yml", "%YAML:1.0\nimage: \"" + kData + "/box.png\"\n");
+  const Model m = load_model(file);
+  EXPECT_EQ(m.name, "plain");
+  EXPECT_EQ(m.principal_points.size(), 5u);
+  EXPECT_GE(static_cast<int>(m.keypoints.size()), kMinModelKeypoints);
+}
+
+TEST_F(ModelFiles, ErrorsNameTheFileAndTheReason) {
+  expect_refused(path("missing.yml"), {path("missing.yml"), "No such file"});
+  expect_refused(path("missing.png"), {path("missing.png"), "No such file"});
+  expect_refused(write("broken.yml", "%YAML:1.0\nimage: [unclosed\n  - {\n"), {path("broken.yml")});
+  expect_refused(write("noimage.yml", "%YAML:1.0\nname: x\n"), {path("noimage.yml"), "'image'"});
+  expect_refused(write("gone.yml", "%YAML:1.0\nimage: nowhere.png\n"),
+                 {path("gone.yml"), path("nowhere.png"), "No such file"});
+  expect_refused(write("notpic.png", "this is not a picture"), {path("notpic.png"), "decoded"});
+  expect_refused(write("outside.yml", "%YAML:1.0\nimage: \"" + kData +
+                                          "/box.png\"\nprincipal_points: [[10, 10], [900, 5]]\n"),
+                 {path("outside.yml"), "principal point 1", "outside"});
+  expect_refused(write("flatline.yml", "%YAML:1.0\nimage: \"" + kData +
+                                           "/box.png\"\noutline: [[0, 0], [10, 0], [20, 0]]\n"),
+                 {path("flatline.yml"), "outline"});
+  expect_refused(
+      write("badgrasp.yml", "%YAML:1.0\nimage: \"" + kData + "/box.png\"\ngrasp_point: 9\n"),
+      {path("badgrasp.yml"), "grasp_point"});
+  expect_refused(kData, {kData, "directory"});
+}
+
+TEST_F(ModelFiles, HugePictureIsRefusedWithItsSize) {
+  cv::imwrite(path("huge.png"), cv::Mat(5000, 4200, CV_8UC1, cv::Scalar(0)));
+  expect_refused(path("huge.png"), {path("huge.png"), "4200x5000"});
+}
