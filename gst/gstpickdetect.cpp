@@ -1,0 +1,836 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+/**
+ * SECTION:element-pickdetect
+ * @title: pickdetect
+ *
+ * Finds every instance of a known object in each video frame, for pick-and-place: SIFT features
+ * of the frame are matched against those of a model picture, every match votes for where the
+ * object's principal points (centre, grasping / delimiting points) lie, and mean shift gathers
+ * the votes into instances. Each instance comes with its centre, angle, scale, principal points,
+ * outline, score, visibility, whether it can be picked (nothing found lies on it) and in which
+ * order, and its grasp point.
+ *
+ * The frame is worked on in place and its pixels are left untouched unless #GstPickDetect:draw
+ * is set. Detection reads the grey or luma plane of the frame where the format has one, and a
+ * grey conversion of packed RGB otherwise.
+ *
+ * Every buffer that goes through gets, also when nothing was found:
+ * - one GstPickDetectMeta (see gst/pickdetect/pickdetect-meta.h, pkg-config
+ *   gstreamer-pickdetect-meta-1.0) holding all instances;
+ * - one #GstVideoRegionOfInterestMeta per instance: roi_type is the model name, the rectangle
+ *   the outline's bounding box clipped to the frame, and a "pick-instance" #GstStructure param
+ *   with fields model (string), center-x, center-y, angle, scale, score, visibility, grasp-x,
+ *   grasp-y, grasp-angle (double), matches, pick-order (int), pickable (boolean), points and
+ *   outline (#GstValueArray of doubles x0, y0, x1, y1, ...; points starts with the centre).
+ *
+ * With #GstPickDetect:post-messages (the default, as facedetect's updates=every_frame), an
+ * element message named "pickdetect" is posted for each frame, with fields timestamp,
+ * stream-time, running-time, duration (guint64) and instances (a #GstValueList of the
+ * "pick-instance" structures above).
+ *
+ * Properties: #GstPickDetect:model is the model file (.yml / .yaml) or a plain picture of the
+ * object; #GstPickDetect:method chooses voting (the paper's method) or one of the RANSAC
+ * baselines; #GstPickDetect:ratio is the 2NN ratio test threshold; #GstPickDetect:min-matches
+ * is the fewest matches an instance needs; #GstPickDetect:bandwidth is the mean-shift radius in
+ * pixels (0 = automatic); #GstPickDetect:max-instances caps the instances per model (0 = no
+ * limit); #GstPickDetect:allow-scale lets instances be larger or smaller than the model;
+ * #GstPickDetect:draw draws the instances into the frame; #GstPickDetect:post-messages posts
+ * the bus messages. All can be changed while playing; a frame is always processed with one
+ * consistent set of them.
+ *
+ * A model that cannot be loaded when the element starts (READY to PAUSED) is an error
+ * (resource not-found, open-read or settings, the message naming the file and the reason) and
+ * the state change fails; so is starting with no model at all. A new model set while playing is
+ * loaded in the thread that sets it (it may take a second) while frames keep going with the old
+ * one, and takes effect between two frames. If that load fails, a warning is posted, the old
+ * model stays and the property reads back the old file.
+ *
+ * Metadata policy: the element never changes the frame's geometry, so the metas of the input
+ * buffer stay on it (it works in place); when a copy is needed, metas tagged only with video,
+ * size, orientation or colorspace tags (or untagged) are copied. An upstream pickdetect's metas
+ * are kept and this element's are added after them.
+ *
+ * ## Example launch line
+ * |[
+ * gst-launch-1.0 filesrc location=/usr/share/doc/opencv-doc/examples/data/box_in_scene.png ! \
+ *   pngdec ! imagefreeze num-buffers=30 ! videoconvert ! \
+ *   pickdetect model=/usr/share/doc/opencv-doc/examples/data/box.png draw=true ! \
+ *   videoconvert ! autovideosink
+ * ]| Shows the box found in the scene, outlined, with its centre and number of matches.
+ */
+#include "gstpickdetect.h"
+
+#include "overlay.hpp"
+
+#include <gst/pickdetect/pickdetect-meta.h>
+#include <pickdetect/detector.hpp>
+#include <pickdetect/error.hpp>
+#include <pickdetect/model.hpp>
+
+#include <gst/video/video.h>
+#include <glib/gstdio.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+#include <memory>
+#include <string>
+#include <unistd.h>
+#include <utility>
+#include <vector>
+
+GST_DEBUG_CATEGORY_STATIC(gst_pick_detect_debug);
+#define GST_CAT_DEFAULT gst_pick_detect_debug
+
+/* The formats the element takes and gives, without any conversion (both pad templates). */
+#define PICKDETECT_VIDEO_FORMATS                                                                   \
+  "{ GRAY8, RGB, BGR, RGBx, BGRx, xRGB, xBGR, RGBA, BGRA, ARGB, ABGR, I420, YV12, NV12, NV21 }"
+#define PICKDETECT_CAPS GST_VIDEO_CAPS_MAKE(PICKDETECT_VIDEO_FORMATS)
+
+enum {
+  PROP_0,
+  PROP_MODEL,
+  PROP_METHOD,
+  PROP_RATIO,
+  PROP_MIN_MATCHES,
+  PROP_BANDWIDTH,
+  PROP_MAX_INSTANCES,
+  PROP_ALLOW_SCALE,
+  PROP_DRAW,
+  PROP_POST_MESSAGES,
+};
+
+#define DEFAULT_MODEL nullptr
+constexpr GstPickDetectMethod DEFAULT_METHOD = GST_PICK_DETECT_METHOD_VOTING;
+constexpr double DEFAULT_RATIO = 0.8;
+constexpr int DEFAULT_MIN_MATCHES = 6;
+constexpr double DEFAULT_BANDWIDTH = 0.0;
+constexpr int DEFAULT_MAX_INSTANCES = 0;
+constexpr gboolean DEFAULT_ALLOW_SCALE = TRUE;
+constexpr gboolean DEFAULT_DRAW = FALSE;
+constexpr gboolean DEFAULT_POST_MESSAGES = TRUE;
+
+// The element's defaults are the core's.
+static_assert(pickdetect::Settings{}.method == pickdetect::Method::Voting);
+static_assert(pickdetect::Settings{}.ratio == DEFAULT_RATIO);
+static_assert(pickdetect::Settings{}.min_matches == DEFAULT_MIN_MATCHES);
+static_assert(pickdetect::Settings{}.bandwidth == DEFAULT_BANDWIDTH);
+static_assert(pickdetect::Settings{}.max_instances == DEFAULT_MAX_INSTANCES);
+static_assert(pickdetect::Settings{}.allow_scale == static_cast<bool>(DEFAULT_ALLOW_SCALE));
+
+namespace {
+
+/// How the grey picture detection reads is got from a frame; chosen once in set_info.
+enum class GreySource {
+  Plane,    ///< GRAY8 and YUV: the luma plane itself.
+  CvtColor, ///< RGB, BGR, RGBx / RGBA, BGRx / BGRA: cv::cvtColor.
+  Weighted, ///< xRGB, xBGR, ARGB, ABGR: channel-weighted sum (cv::transform).
+};
+
+/// Everything set through properties, copied as a whole for each frame.
+struct Config {
+  pickdetect::Settings settings;
+  bool draw = DEFAULT_DRAW;
+  bool post_messages = DEFAULT_POST_MESSAGES;
+};
+
+struct LoadFailure {
+  GstResourceError code = GST_RESOURCE_ERROR_SETTINGS;
+  std::string message;
+};
+
+} // namespace
+
+/// The element's C++ state. Fields above the line are guarded by the object lock.
+struct GstPickDetectPrivate {
+  std::string model_path;       ///< The `model` property.
+  std::string loaded_path;      ///< The file `detector` was built from.
+  guint64 model_generation = 0; ///< Bumped by each `model` set; stale loads are dropped.
+  bool started = false;         ///< Between start and stop.
+  Config config;
+  std::shared_ptr<const pickdetect::Detector> detector;
+  // ---- streaming thread only ----
+  GreySource grey_source = GreySource::Plane;
+  int cvt_code = -1;
+  cv::Mat weights; ///< 1 x channels, CV_32F, for GreySource::Weighted.
+  cv::Mat grey;    ///< Conversion target for packed RGB.
+  gstpickdetect::Overlay overlay;
+  bool can_draw = false;
+  pickdetect::Detection detection; ///< The current frame's, from transform_frame_ip.
+  Config frame_config;             ///< The current frame's settings.
+};
+
+struct _GstPickDetect {
+  GstVideoFilter parent;
+  GstPickDetectPrivate* priv;
+};
+
+#define gst_pick_detect_parent_class parent_class
+G_DEFINE_TYPE(GstPickDetect, gst_pick_detect, GST_TYPE_VIDEO_FILTER);
+GST_ELEMENT_REGISTER_DEFINE_WITH_CODE(pickdetect, "pickdetect", GST_RANK_NONE, GST_TYPE_PICK_DETECT,
+                                      GST_DEBUG_CATEGORY_INIT(gst_pick_detect_debug, "pickdetect",
+                                                              0, "pickdetect element"));
+
+static GstStaticPadTemplate sink_template =
+    GST_STATIC_PAD_TEMPLATE("sink", GST_PAD_SINK, GST_PAD_ALWAYS, GST_STATIC_CAPS(PICKDETECT_CAPS));
+static GstStaticPadTemplate src_template =
+    GST_STATIC_PAD_TEMPLATE("src", GST_PAD_SRC, GST_PAD_ALWAYS, GST_STATIC_CAPS(PICKDETECT_CAPS));
+
+GType gst_pick_detect_method_get_type(void) {
+  static GType type = 0;
+  static const GEnumValue values[] = {
+      {GST_PICK_DETECT_METHOD_VOTING,
+       "Votes of every match for the principal points, gathered by mean shift", "voting"},
+      {GST_PICK_DETECT_METHOD_RANSAC_CLUSTERED,
+       "One RANSAC homography per mean-shift cluster of centre votes", "ransac-clustered"},
+      {GST_PICK_DETECT_METHOD_RANSAC_ALL,
+       "One RANSAC homography over all matches (one instance at most)", "ransac-all"},
+      {0, nullptr, nullptr},
+  };
+  if (g_once_init_enter(&type)) {
+    GType registered = g_enum_register_static("GstPickDetectMethod", values);
+    g_once_init_leave(&type, registered);
+  }
+  return type;
+}
+
+static pickdetect::Method to_core_method(gint method) {
+  switch (method) {
+  case GST_PICK_DETECT_METHOD_RANSAC_CLUSTERED:
+    return pickdetect::Method::RansacClustered;
+  case GST_PICK_DETECT_METHOD_RANSAC_ALL:
+    return pickdetect::Method::RansacAll;
+  default:
+    return pickdetect::Method::Voting;
+  }
+}
+
+static GstPickDetectMethod from_core_method(pickdetect::Method method) {
+  switch (method) {
+  case pickdetect::Method::RansacClustered:
+    return GST_PICK_DETECT_METHOD_RANSAC_CLUSTERED;
+  case pickdetect::Method::RansacAll:
+    return GST_PICK_DETECT_METHOD_RANSAC_ALL;
+  case pickdetect::Method::Voting:
+    break;
+  }
+  return GST_PICK_DETECT_METHOD_VOTING;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Model loading                                                                               */
+
+/// Builds a detector for the model file; nullptr and `failure` filled when it cannot. Never
+/// throws.
+static std::shared_ptr<const pickdetect::Detector> load_detector(const std::string& path,
+                                                                 LoadFailure& failure) {
+  std::string reason;
+  try {
+    std::vector<pickdetect::Model> models;
+    models.push_back(pickdetect::load_model(path));
+    return std::make_shared<const pickdetect::Detector>(std::move(models));
+  } catch (const std::exception& e) {
+    reason = e.what();
+  } catch (...) {
+    reason = "unknown error";
+  }
+  if (!g_file_test(path.c_str(), G_FILE_TEST_EXISTS))
+    failure.code = GST_RESOURCE_ERROR_NOT_FOUND;
+  else if (g_access(path.c_str(), R_OK) != 0 || g_file_test(path.c_str(), G_FILE_TEST_IS_DIR))
+    failure.code = GST_RESOURCE_ERROR_OPEN_READ;
+  else
+    failure.code = GST_RESOURCE_ERROR_SETTINGS;
+  if (reason.find(path) != std::string::npos)
+    failure.message = "Could not load the model: " + reason;
+  else
+    failure.message = "Could not load the model \"" + path + "\": " + reason;
+  return nullptr;
+}
+
+/// Posts an error (or warning) message in the RESOURCE domain.
+static void post_resource_message(GstPickDetect* self, GstMessageType type, GstResourceError code,
+                                  const std::string& text, const std::string& debug) {
+  gst_element_message_full(GST_ELEMENT(self), type, GST_RESOURCE_ERROR, code,
+                           g_strdup(text.c_str()), g_strdup(debug.c_str()), __FILE__, GST_FUNCTION,
+                           __LINE__);
+}
+
+/// Loads the model while playing, outside the lock, and swaps it in between two frames.
+static void reload_model(GstPickDetect* self, const std::string& path, guint64 generation) {
+  GstPickDetectPrivate* priv = self->priv;
+  LoadFailure failure;
+  GST_INFO_OBJECT(self, "loading model %s", path.c_str());
+  std::shared_ptr<const pickdetect::Detector> detector =
+      path.empty() ? nullptr : load_detector(path, failure);
+  if (path.empty()) {
+    failure.code = GST_RESOURCE_ERROR_NOT_FOUND;
+    failure.message = "No model: the \"model\" property was set to nothing";
+  }
+
+  std::string kept;
+  GST_OBJECT_LOCK(self);
+  const bool current = generation == priv->model_generation && priv->started;
+  if (current && detector) {
+    priv->detector = detector; // The next frame takes it; the old one lives on with its frame.
+    priv->loaded_path = path;
+  } else if (current) {
+    priv->model_path = priv->loaded_path;
+    kept = priv->loaded_path;
+  }
+  GST_OBJECT_UNLOCK(self);
+
+  if (!current) {
+    GST_DEBUG_OBJECT(self, "model %s superseded or element stopped, dropped", path.c_str());
+  } else if (detector) {
+    GST_INFO_OBJECT(self, "now using model %s", path.c_str());
+  } else {
+    GST_WARNING_OBJECT(self, "%s", failure.message.c_str());
+    post_resource_message(self, GST_MESSAGE_WARNING, failure.code, failure.message,
+                          "keeping the model " + kept);
+    g_object_notify(G_OBJECT(self), "model");
+  }
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Properties                                                                                  */
+
+static void gst_pick_detect_set_property(GObject* object, guint prop_id, const GValue* value,
+                                         GParamSpec* pspec) {
+  GstPickDetect* self = GST_PICK_DETECT(object);
+  GstPickDetectPrivate* priv = self->priv;
+
+  if (prop_id == PROP_MODEL) {
+    const gchar* path = g_value_get_string(value);
+    GST_OBJECT_LOCK(self);
+    priv->model_path = path ? path : "";
+    const guint64 generation = ++priv->model_generation;
+    const bool started = priv->started;
+    const std::string model = priv->model_path;
+    GST_OBJECT_UNLOCK(self);
+    if (started)
+      reload_model(self, model, generation);
+    return;
+  }
+
+  GST_OBJECT_LOCK(self);
+  Config& config = priv->config;
+  switch (prop_id) {
+  case PROP_METHOD:
+    config.settings.method = to_core_method(g_value_get_enum(value));
+    break;
+  case PROP_RATIO:
+    config.settings.ratio = g_value_get_double(value);
+    break;
+  case PROP_MIN_MATCHES:
+    config.settings.min_matches = g_value_get_int(value);
+    break;
+  case PROP_BANDWIDTH:
+    config.settings.bandwidth = g_value_get_double(value);
+    break;
+  case PROP_MAX_INSTANCES:
+    config.settings.max_instances = g_value_get_int(value);
+    break;
+  case PROP_ALLOW_SCALE:
+    config.settings.allow_scale = g_value_get_boolean(value);
+    break;
+  case PROP_DRAW:
+    config.draw = g_value_get_boolean(value);
+    break;
+  case PROP_POST_MESSAGES:
+    config.post_messages = g_value_get_boolean(value);
+    break;
+  default:
+    G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+    break;
+  }
+  GST_OBJECT_UNLOCK(self);
+}
+
+static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue* value,
+                                         GParamSpec* pspec) {
+  GstPickDetect* self = GST_PICK_DETECT(object);
+  GstPickDetectPrivate* priv = self->priv;
+
+  GST_OBJECT_LOCK(self);
+  const Config& config = priv->config;
+  switch (prop_id) {
+  case PROP_MODEL:
+    g_value_set_string(value, priv->model_path.empty() ? nullptr : priv->model_path.c_str());
+    break;
+  case PROP_METHOD:
+    g_value_set_enum(value, from_core_method(config.settings.method));
+    break;
+  case PROP_RATIO:
+    g_value_set_double(value, config.settings.ratio);
+    break;
+  case PROP_MIN_MATCHES:
+    g_value_set_int(value, config.settings.min_matches);
+    break;
+  case PROP_BANDWIDTH:
+    g_value_set_double(value, config.settings.bandwidth);
+    break;
+  case PROP_MAX_INSTANCES:
+    g_value_set_int(value, config.settings.max_instances);
+    break;
+  case PROP_ALLOW_SCALE:
+    g_value_set_boolean(value, config.settings.allow_scale);
+    break;
+  case PROP_DRAW:
+    g_value_set_boolean(value, config.draw);
+    break;
+  case PROP_POST_MESSAGES:
+    g_value_set_boolean(value, config.post_messages);
+    break;
+  default:
+    G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
+    break;
+  }
+  GST_OBJECT_UNLOCK(self);
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Start / stop / caps                                                                         */
+
+static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
+  GstPickDetect* self = GST_PICK_DETECT(trans);
+  GstPickDetectPrivate* priv = self->priv;
+
+  // A `model` set while this loads is caught by its generation and loaded again.
+  for (;;) {
+    GST_OBJECT_LOCK(self);
+    const std::string path = priv->model_path;
+    const guint64 generation = priv->model_generation;
+    GST_OBJECT_UNLOCK(self);
+
+    if (path.empty()) {
+      post_resource_message(self, GST_MESSAGE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND,
+                            "No model: set the \"model\" property to a model file (.yml) or a "
+                            "picture of the object",
+                            "property \"model\" is not set");
+      return FALSE;
+    }
+
+    GST_INFO_OBJECT(self, "loading model %s", path.c_str());
+    LoadFailure failure;
+    std::shared_ptr<const pickdetect::Detector> detector = load_detector(path, failure);
+    if (!detector) {
+      GST_ERROR_OBJECT(self, "%s", failure.message.c_str());
+      post_resource_message(self, GST_MESSAGE_ERROR, failure.code, failure.message,
+                            "model=" + path);
+      return FALSE;
+    }
+
+    GST_OBJECT_LOCK(self);
+    const bool current = generation == priv->model_generation;
+    if (current) {
+      priv->detector = std::move(detector);
+      priv->loaded_path = path;
+      priv->started = true;
+    }
+    GST_OBJECT_UNLOCK(self);
+    if (current)
+      return TRUE;
+  }
+}
+
+static gboolean gst_pick_detect_stop(GstBaseTransform* trans) {
+  GstPickDetect* self = GST_PICK_DETECT(trans);
+  std::shared_ptr<const pickdetect::Detector> old;
+  GST_OBJECT_LOCK(self);
+  self->priv->started = false;
+  old = std::move(self->priv->detector);
+  self->priv->loaded_path.clear();
+  GST_OBJECT_UNLOCK(self);
+  self->priv->detection = pickdetect::Detection();
+  return TRUE; // `old` is released here, outside the lock.
+}
+
+static gboolean gst_pick_detect_set_info(GstVideoFilter* filter, GstCaps* incaps,
+                                         GstVideoInfo* in_info, GstCaps* outcaps,
+                                         GstVideoInfo* out_info) {
+  (void)incaps;
+  (void)outcaps;
+  (void)out_info;
+  GstPickDetect* self = GST_PICK_DETECT(filter);
+  GstPickDetectPrivate* priv = self->priv;
+  const GstVideoFormatInfo* finfo = in_info->finfo;
+
+  priv->cvt_code = -1;
+  priv->weights.release();
+  if (GST_VIDEO_FORMAT_INFO_IS_GRAY(finfo) || GST_VIDEO_FORMAT_INFO_IS_YUV(finfo)) {
+    priv->grey_source = GreySource::Plane;
+  } else {
+    switch (GST_VIDEO_INFO_FORMAT(in_info)) {
+    case GST_VIDEO_FORMAT_RGB:
+      priv->cvt_code = cv::COLOR_RGB2GRAY;
+      break;
+    case GST_VIDEO_FORMAT_BGR:
+      priv->cvt_code = cv::COLOR_BGR2GRAY;
+      break;
+    case GST_VIDEO_FORMAT_RGBx:
+    case GST_VIDEO_FORMAT_RGBA:
+      priv->cvt_code = cv::COLOR_RGBA2GRAY;
+      break;
+    case GST_VIDEO_FORMAT_BGRx:
+    case GST_VIDEO_FORMAT_BGRA:
+      priv->cvt_code = cv::COLOR_BGRA2GRAY;
+      break;
+    default:
+      break;
+    }
+    if (priv->cvt_code >= 0) {
+      priv->grey_source = GreySource::CvtColor;
+    } else {
+      // Same weights as cv::cvtColor's, placed on the bytes that hold R, G and B.
+      const int channels = GST_VIDEO_FORMAT_INFO_PSTRIDE(finfo, 0);
+      priv->weights = cv::Mat::zeros(1, channels, CV_32F);
+      const float luma[3] = {0.299f, 0.587f, 0.114f};
+      for (int c = 0; c < 3; c++)
+        priv->weights.at<float>(0, GST_VIDEO_FORMAT_INFO_POFFSET(finfo, c)) = luma[c];
+      priv->grey_source = GreySource::Weighted;
+    }
+  }
+  priv->grey = cv::Mat(GST_VIDEO_INFO_HEIGHT(in_info), GST_VIDEO_INFO_WIDTH(in_info), CV_8UC1);
+
+  priv->can_draw = priv->overlay.configure(*in_info);
+  if (!priv->can_draw) {
+    GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, (nullptr),
+                      ("cannot draw in format %s", GST_VIDEO_INFO_NAME(in_info)));
+    return FALSE;
+  }
+  GST_DEBUG_OBJECT(self, "format %s, grey from %s", GST_VIDEO_INFO_NAME(in_info),
+                   priv->grey_source == GreySource::Plane      ? "the luma plane"
+                   : priv->grey_source == GreySource::CvtColor ? "cv::cvtColor"
+                                                               : "a weighted channel sum");
+  return TRUE;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* Per frame                                                                                   */
+
+static GstFlowReturn gst_pick_detect_transform_frame_ip(GstVideoFilter* filter,
+                                                        GstVideoFrame* frame) {
+  GstPickDetect* self = GST_PICK_DETECT(filter);
+  GstPickDetectPrivate* priv = self->priv;
+
+  std::shared_ptr<const pickdetect::Detector> detector;
+  GST_OBJECT_LOCK(self);
+  detector = priv->detector;
+  priv->frame_config = priv->config;
+  GST_OBJECT_UNLOCK(self);
+  const Config& config = priv->frame_config;
+
+  priv->detection = pickdetect::Detection();
+  if (!detector) {
+    GST_ELEMENT_ERROR(self, CORE, STATE_CHANGE, ("No model loaded"), (nullptr));
+    return GST_FLOW_ERROR;
+  }
+
+  const int width = GST_VIDEO_FRAME_WIDTH(frame);
+  const int height = GST_VIDEO_FRAME_HEIGHT(frame);
+  try {
+    cv::Mat grey;
+    if (priv->grey_source == GreySource::Plane) {
+      grey = cv::Mat(height, width, CV_8UC1, GST_VIDEO_FRAME_PLANE_DATA(frame, 0),
+                     static_cast<size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, 0)));
+    } else {
+      const int channels = GST_VIDEO_FRAME_COMP_PSTRIDE(frame, 0);
+      cv::Mat packed(height, width, CV_8UC(channels), GST_VIDEO_FRAME_PLANE_DATA(frame, 0),
+                     static_cast<size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, 0)));
+      if (priv->grey_source == GreySource::CvtColor)
+        cv::cvtColor(packed, priv->grey, priv->cvt_code);
+      else
+        cv::transform(packed, priv->grey, priv->weights);
+      grey = priv->grey;
+    }
+    priv->detection = detector->detect(grey, config.settings);
+  } catch (const std::exception& e) {
+    GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Detection failed: %s", e.what()), (nullptr));
+    return GST_FLOW_ERROR;
+  } catch (...) {
+    GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Detection failed"), ("unknown exception"));
+    return GST_FLOW_ERROR;
+  }
+
+  GST_LOG_OBJECT(self, "%zu instances; features %.1f ms, matching %.1f ms, clustering %.1f ms",
+                 priv->detection.instances.size(), priv->detection.timings.features_ms,
+                 priv->detection.timings.matching_ms, priv->detection.timings.clustering_ms);
+
+  if (config.draw && priv->can_draw) {
+    try {
+      priv->overlay.draw(*frame, priv->detection.instances);
+    } catch (const std::exception& e) {
+      GST_ELEMENT_WARNING(self, STREAM, FAILED, ("Drawing failed: %s", e.what()), (nullptr));
+    }
+  }
+  return GST_FLOW_OK;
+}
+
+static GValue double_array(const std::vector<cv::Point2f>& points) {
+  GValue array = G_VALUE_INIT;
+  g_value_init(&array, GST_TYPE_ARRAY);
+  for (const cv::Point2f& p : points) {
+    for (const float v : {p.x, p.y}) {
+      GValue item = G_VALUE_INIT;
+      g_value_init(&item, G_TYPE_DOUBLE);
+      g_value_set_double(&item, v);
+      gst_value_array_append_and_take_value(&array, &item);
+    }
+  }
+  return array;
+}
+
+/// The "pick-instance" structure of ROI params and bus messages.
+static GstStructure* instance_structure(const pickdetect::Instance& instance) {
+  GstStructure* s = gst_structure_new(
+      "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "center-x",
+      G_TYPE_DOUBLE, static_cast<double>(instance.center.x), "center-y", G_TYPE_DOUBLE,
+      static_cast<double>(instance.center.y), "angle", G_TYPE_DOUBLE, instance.angle, "scale",
+      G_TYPE_DOUBLE, instance.scale, "score", G_TYPE_DOUBLE, instance.score, "matches", G_TYPE_INT,
+      instance.matches, "visibility", G_TYPE_DOUBLE, instance.visibility, "pickable",
+      G_TYPE_BOOLEAN, static_cast<gboolean>(instance.pickable), "pick-order", G_TYPE_INT,
+      instance.pick_order, "grasp-x", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.x),
+      "grasp-y", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.y), "grasp-angle", G_TYPE_DOUBLE,
+      instance.grasp_angle, nullptr);
+  GValue points = double_array(instance.points);
+  gst_structure_take_value(s, "points", &points);
+  GValue outline = double_array(instance.outline);
+  gst_structure_take_value(s, "outline", &outline);
+  return s;
+}
+
+static std::vector<GstPickDetectPoint> to_meta_points(const std::vector<cv::Point2f>& points) {
+  std::vector<GstPickDetectPoint> out;
+  out.reserve(points.size());
+  for (const cv::Point2f& p : points)
+    out.push_back(GstPickDetectPoint{p.x, p.y});
+  return out;
+}
+
+static void attach_metas(GstPickDetect* self, GstBuffer* buffer, int width, int height) {
+  const std::vector<pickdetect::Instance>& instances = self->priv->detection.instances;
+
+  GstPickDetectMeta* meta = gst_buffer_add_pickdetect_meta(buffer);
+  for (const pickdetect::Instance& in : instances) {
+    std::vector<GstPickDetectPoint> points = to_meta_points(in.points);
+    std::vector<GstPickDetectPoint> outline = to_meta_points(in.outline);
+    GstPickDetectInstance out{};
+    out.model_name = const_cast<gchar*>(in.model_name.c_str());
+    out.center_x = in.center.x;
+    out.center_y = in.center.y;
+    out.angle = in.angle;
+    out.scale = in.scale;
+    out.score = in.score;
+    out.matches = in.matches;
+    out.n_points = static_cast<guint>(points.size());
+    out.points = points.data();
+    out.n_outline = static_cast<guint>(outline.size());
+    out.outline = outline.data();
+    out.visibility = in.visibility;
+    out.pickable = in.pickable;
+    out.pick_order = in.pick_order;
+    out.grasp_x = in.grasp.x;
+    out.grasp_y = in.grasp.y;
+    out.grasp_angle = in.grasp_angle;
+    gst_pickdetect_meta_add_instance(meta, &out);
+  }
+
+  // ROI ids continue after those already on the buffer, so they stay unique within it.
+  gint next_id = 0;
+  gpointer state = nullptr;
+  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
+             buffer, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
+    next_id = std::max(next_id, reinterpret_cast<GstVideoRegionOfInterestMeta*>(m)->id + 1);
+  }
+
+  for (const pickdetect::Instance& in : instances) {
+    const std::vector<cv::Point2f>& shape = in.outline.empty() ? in.points : in.outline;
+    double x0 = in.center.x, y0 = in.center.y, x1 = in.center.x, y1 = in.center.y;
+    for (const cv::Point2f& p : shape) {
+      x0 = std::min<double>(x0, p.x);
+      y0 = std::min<double>(y0, p.y);
+      x1 = std::max<double>(x1, p.x);
+      y1 = std::max<double>(y1, p.y);
+    }
+    const int left = std::clamp(static_cast<int>(std::floor(x0)), 0, width);
+    const int top = std::clamp(static_cast<int>(std::floor(y0)), 0, height);
+    const int right = std::clamp(static_cast<int>(std::ceil(x1)), 0, width);
+    const int bottom = std::clamp(static_cast<int>(std::ceil(y1)), 0, height);
+    GstVideoRegionOfInterestMeta* roi = gst_buffer_add_video_region_of_interest_meta(
+        buffer, in.model_name.c_str(), static_cast<guint>(left), static_cast<guint>(top),
+        static_cast<guint>(right - left), static_cast<guint>(bottom - top));
+    roi->id = next_id++;
+    roi->parent_id = -1;
+    gst_video_region_of_interest_meta_add_param(roi, instance_structure(in));
+  }
+}
+
+static void post_message(GstPickDetect* self, GstBuffer* buffer) {
+  GstBaseTransform* trans = GST_BASE_TRANSFORM(self);
+  const GstClockTime ts = GST_BUFFER_PTS(buffer);
+  GstClockTime running_time = GST_CLOCK_TIME_NONE, stream_time = GST_CLOCK_TIME_NONE;
+  if (trans->segment.format == GST_FORMAT_TIME) {
+    running_time = gst_segment_to_running_time(&trans->segment, GST_FORMAT_TIME, ts);
+    stream_time = gst_segment_to_stream_time(&trans->segment, GST_FORMAT_TIME, ts);
+  }
+
+  GValue list = G_VALUE_INIT;
+  g_value_init(&list, GST_TYPE_LIST);
+  for (const pickdetect::Instance& in : self->priv->detection.instances) {
+    GValue item = G_VALUE_INIT;
+    g_value_init(&item, GST_TYPE_STRUCTURE);
+    g_value_take_boxed(&item, instance_structure(in));
+    gst_value_list_append_and_take_value(&list, &item);
+  }
+  GstStructure* s =
+      gst_structure_new("pickdetect", "timestamp", G_TYPE_UINT64, ts, "stream-time", G_TYPE_UINT64,
+                        stream_time, "running-time", G_TYPE_UINT64, running_time, "duration",
+                        G_TYPE_UINT64, GST_BUFFER_DURATION(buffer), nullptr);
+  gst_structure_take_value(s, "instances", &list);
+  gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
+}
+
+/// GstVideoFilter maps the frame around transform_frame_ip with a reference of its own, so the
+/// metas are added here, once the frame is unmapped and the buffer writable again.
+static GstFlowReturn gst_pick_detect_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
+  GstPickDetect* self = GST_PICK_DETECT(trans);
+  GstFlowReturn ret = GST_BASE_TRANSFORM_CLASS(parent_class)->transform_ip(trans, buffer);
+  if (ret != GST_FLOW_OK)
+    return ret;
+  if (!gst_buffer_is_writable(buffer)) {
+    GST_ELEMENT_ERROR(self, CORE, FAILED, (nullptr), ("buffer not writable, cannot add metas"));
+    return GST_FLOW_ERROR;
+  }
+  const GstVideoInfo* info = &GST_VIDEO_FILTER(self)->in_info;
+  try {
+    attach_metas(self, buffer, GST_VIDEO_INFO_WIDTH(info), GST_VIDEO_INFO_HEIGHT(info));
+    if (self->priv->frame_config.post_messages)
+      post_message(self, buffer);
+  } catch (const std::exception& e) {
+    GST_ELEMENT_ERROR(self, CORE, FAILED, ("Could not attach the instances: %s", e.what()),
+                      (nullptr));
+    return GST_FLOW_ERROR;
+  }
+  return GST_FLOW_OK;
+}
+
+/// Keeps the metas that do not depend on anything the element could change.
+static gboolean gst_pick_detect_transform_meta(GstBaseTransform* trans, GstBuffer* outbuf,
+                                               GstMeta* meta, GstBuffer* inbuf) {
+  (void)outbuf;
+  (void)inbuf;
+  const GstMetaInfo* info = meta->info;
+  const gchar* const valid_tags[] = {GST_META_TAG_VIDEO_STR, GST_META_TAG_VIDEO_SIZE_STR,
+                                     GST_META_TAG_VIDEO_ORIENTATION_STR,
+                                     GST_META_TAG_VIDEO_COLORSPACE_STR, nullptr};
+  const gchar* const* tags = gst_meta_api_type_get_tags(info->api);
+  for (; tags && *tags; tags++) {
+    if (!g_strv_contains(valid_tags, *tags)) {
+      GST_LOG_OBJECT(trans, "dropping %s (tag %s)", g_type_name(info->api), *tags);
+      return FALSE;
+    }
+  }
+  return TRUE;
+}
+
+/* ------------------------------------------------------------------------------------------- */
+/* GObject                                                                                     */
+
+static void gst_pick_detect_finalize(GObject* object) {
+  GstPickDetect* self = GST_PICK_DETECT(object);
+  delete self->priv;
+  self->priv = nullptr;
+  G_OBJECT_CLASS(parent_class)->finalize(object);
+}
+
+static void gst_pick_detect_init(GstPickDetect* self) {
+  self->priv = new GstPickDetectPrivate();
+}
+
+static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
+  GObjectClass* gobject_class = G_OBJECT_CLASS(klass);
+  GstElementClass* element_class = GST_ELEMENT_CLASS(klass);
+  GstBaseTransformClass* trans_class = GST_BASE_TRANSFORM_CLASS(klass);
+  GstVideoFilterClass* filter_class = GST_VIDEO_FILTER_CLASS(klass);
+  const auto flags = static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                              GST_PARAM_MUTABLE_PLAYING);
+
+  gobject_class->set_property = gst_pick_detect_set_property;
+  gobject_class->get_property = gst_pick_detect_get_property;
+  gobject_class->finalize = gst_pick_detect_finalize;
+
+  g_object_class_install_property(
+      gobject_class, PROP_MODEL,
+      g_param_spec_string("model", "Model",
+                          "Model file (.yml / .yaml) or plain picture of the object to find. "
+                          "Required. Set while playing, it is loaded and then used from the next "
+                          "frame on; if it cannot be loaded a warning is posted and the old model "
+                          "stays",
+                          DEFAULT_MODEL, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_METHOD,
+      g_param_spec_enum("method", "Method",
+                        "How instances are found from the matches: the paper's voting, or a RANSAC "
+                        "baseline",
+                        GST_TYPE_PICK_DETECT_METHOD, DEFAULT_METHOD, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_RATIO,
+      g_param_spec_double("ratio", "Ratio",
+                          "2NN ratio test: a match is kept when its nearest descriptor distance "
+                          "is below this fraction of the second nearest (0 < ratio < 1)",
+                          0.01, 0.99, DEFAULT_RATIO, flags));
+  g_object_class_install_property(gobject_class, PROP_MIN_MATCHES,
+                                  g_param_spec_int("min-matches", "Minimum matches",
+                                                   "Fewest supporting matches an instance needs", 1,
+                                                   G_MAXINT, DEFAULT_MIN_MATCHES, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_BANDWIDTH,
+      g_param_spec_double("bandwidth", "Bandwidth",
+                          "Mean-shift bandwidth in frame pixels; 0 = automatic (from the model "
+                          "size)",
+                          0.0, G_MAXDOUBLE, DEFAULT_BANDWIDTH, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_MAX_INSTANCES,
+      g_param_spec_int("max-instances", "Maximum instances",
+                       "At most this many instances per frame, best first; 0 = no limit", 0,
+                       G_MAXINT, DEFAULT_MAX_INSTANCES, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_ALLOW_SCALE,
+      g_param_spec_boolean("allow-scale", "Allow scale",
+                           "Instances may be larger or smaller than the model (else the scale is "
+                           "fixed at 1)",
+                           DEFAULT_ALLOW_SCALE, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_DRAW,
+      g_param_spec_boolean("draw", "Draw",
+                           "Draw each instance into the frame: white outline, green circle on the "
+                           "centre with the number of matches, small circles on the other "
+                           "principal points (otherwise pixels are left untouched)",
+                           DEFAULT_DRAW, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_POST_MESSAGES,
+      g_param_spec_boolean("post-messages", "Post messages",
+                           "Post a \"pickdetect\" element message with the instances for each "
+                           "frame (on by default, like facedetect's updates=every_frame)",
+                           DEFAULT_POST_MESSAGES, flags));
+
+  gst_element_class_set_static_metadata(
+      element_class, "Pick detection", "Filter/Analyzer/Video",
+      "Finds every instance of a known object in each frame (SIFT matches, votes, mean shift) "
+      "and attaches them as metadata",
+      "gst-pickdetect authors");
+  gst_element_class_add_static_pad_template(element_class, &sink_template);
+  gst_element_class_add_static_pad_template(element_class, &src_template);
+
+  trans_class->start = GST_DEBUG_FUNCPTR(gst_pick_detect_start);
+  trans_class->stop = GST_DEBUG_FUNCPTR(gst_pick_detect_stop);
+  trans_class->transform_ip = GST_DEBUG_FUNCPTR(gst_pick_detect_transform_ip);
+  trans_class->transform_meta = GST_DEBUG_FUNCPTR(gst_pick_detect_transform_meta);
+  trans_class->passthrough_on_same_caps = FALSE;
+  filter_class->set_info = GST_DEBUG_FUNCPTR(gst_pick_detect_set_info);
+  filter_class->transform_frame_ip = GST_DEBUG_FUNCPTR(gst_pick_detect_transform_frame_ip);
+
+  gst_type_mark_as_plugin_api(GST_TYPE_PICK_DETECT_METHOD, static_cast<GstPluginAPIFlags>(0));
+}

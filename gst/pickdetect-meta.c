@@ -1,0 +1,170 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later
+ *
+ * GstPickDetectMeta, see include/gst/pickdetect/pickdetect-meta.h.
+ */
+#include <gst/pickdetect/pickdetect-meta.h>
+
+#include <gst/video/video.h>
+
+#include <math.h>
+#include <string.h>
+
+static void instance_clear(GstPickDetectInstance* instance) {
+  g_free(instance->model_name);
+  g_free(instance->points);
+  g_free(instance->outline);
+  memset(instance, 0, sizeof(*instance));
+}
+
+static void instance_copy(GstPickDetectInstance* dest, const GstPickDetectInstance* src) {
+  *dest = *src;
+  dest->model_name = g_strdup(src->model_name ? src->model_name : "");
+  dest->points =
+      src->n_points ? g_memdup2(src->points, sizeof(GstPickDetectPoint) * src->n_points) : NULL;
+  dest->outline =
+      src->n_outline ? g_memdup2(src->outline, sizeof(GstPickDetectPoint) * src->n_outline) : NULL;
+  if (!dest->points)
+    dest->n_points = 0;
+  if (!dest->outline)
+    dest->n_outline = 0;
+}
+
+/* An angle in degrees (clockwise, y down) after stretching the picture by sx, sy. */
+static gdouble stretch_angle(gdouble angle, gdouble sx, gdouble sy) {
+  if (sx == sy)
+    return angle;
+  const gdouble radians = angle * G_PI / 180.0;
+  gdouble out = atan2(sy * sin(radians), sx * cos(radians)) * 180.0 / G_PI;
+  if (out < 0.0)
+    out += 360.0;
+  if (out >= 360.0)
+    out -= 360.0;
+  return out;
+}
+
+static void instance_scale(GstPickDetectInstance* instance, gdouble sx, gdouble sy) {
+  instance->center_x *= sx;
+  instance->center_y *= sy;
+  instance->grasp_x *= sx;
+  instance->grasp_y *= sy;
+  for (guint i = 0; i < instance->n_points; i++) {
+    instance->points[i].x *= sx;
+    instance->points[i].y *= sy;
+  }
+  for (guint i = 0; i < instance->n_outline; i++) {
+    instance->outline[i].x *= sx;
+    instance->outline[i].y *= sy;
+  }
+  instance->angle = stretch_angle(instance->angle, sx, sy);
+  instance->grasp_angle = stretch_angle(instance->grasp_angle, sx, sy);
+  instance->scale *= sqrt(sx * sy);
+}
+
+static gboolean gst_pickdetect_meta_init(GstMeta* meta, gpointer params, GstBuffer* buffer) {
+  (void)params;
+  (void)buffer;
+  GstPickDetectMeta* pmeta = (GstPickDetectMeta*)meta;
+  pmeta->n_instances = 0;
+  pmeta->instances = NULL;
+  return TRUE;
+}
+
+static void gst_pickdetect_meta_free(GstMeta* meta, GstBuffer* buffer) {
+  (void)buffer;
+  GstPickDetectMeta* pmeta = (GstPickDetectMeta*)meta;
+  for (guint i = 0; i < pmeta->n_instances; i++)
+    instance_clear(&pmeta->instances[i]);
+  g_free(pmeta->instances);
+  pmeta->instances = NULL;
+  pmeta->n_instances = 0;
+}
+
+static gboolean gst_pickdetect_meta_transform(GstBuffer* dest, GstMeta* meta, GstBuffer* buffer,
+                                              GQuark type, gpointer data) {
+  (void)buffer;
+  const GstPickDetectMeta* src = (const GstPickDetectMeta*)meta;
+  gdouble sx = 1.0, sy = 1.0;
+
+  if (GST_META_TRANSFORM_IS_COPY(type)) {
+    /* Copied whole, also for region copies: the meta describes the frame, not bytes. */
+  } else if (GST_VIDEO_META_TRANSFORM_IS_SCALE(type)) {
+    const GstVideoMetaTransform* trans = (const GstVideoMetaTransform*)data;
+    const gint in_w = GST_VIDEO_INFO_WIDTH(trans->in_info);
+    const gint in_h = GST_VIDEO_INFO_HEIGHT(trans->in_info);
+    if (in_w <= 0 || in_h <= 0)
+      return FALSE;
+    sx = (gdouble)GST_VIDEO_INFO_WIDTH(trans->out_info) / in_w;
+    sy = (gdouble)GST_VIDEO_INFO_HEIGHT(trans->out_info) / in_h;
+  } else {
+    /* Unknown transform (crop, flip...): the coordinates would be wrong, so drop the meta. */
+    return FALSE;
+  }
+
+  GstPickDetectMeta* out = gst_buffer_add_pickdetect_meta(dest);
+  if (!out)
+    return FALSE;
+  for (guint i = 0; i < src->n_instances; i++) {
+    GstPickDetectInstance* copy =
+        (GstPickDetectInstance*)gst_pickdetect_meta_add_instance(out, &src->instances[i]);
+    if (sx != 1.0 || sy != 1.0)
+      instance_scale(copy, sx, sy);
+  }
+  return TRUE;
+}
+
+GType gst_pickdetect_meta_api_get_type(void) {
+  static GType type = 0;
+  static const gchar* tags[] = {GST_META_TAG_VIDEO_STR, GST_META_TAG_VIDEO_SIZE_STR,
+                                GST_META_TAG_VIDEO_ORIENTATION_STR, NULL};
+  if (g_once_init_enter(&type)) {
+    GType registered = gst_meta_api_type_register("GstPickDetectMetaAPI", tags);
+    g_once_init_leave(&type, registered);
+  }
+  return type;
+}
+
+const GstMetaInfo* gst_pickdetect_meta_get_info(void) {
+  static const GstMetaInfo* info = NULL;
+  if (g_once_init_enter((GstMetaInfo**)&info)) {
+    const GstMetaInfo* registered = gst_meta_register(
+        GST_PICKDETECT_META_API_TYPE, "GstPickDetectMeta", sizeof(GstPickDetectMeta),
+        gst_pickdetect_meta_init, gst_pickdetect_meta_free, gst_pickdetect_meta_transform);
+    g_once_init_leave((GstMetaInfo**)&info, (GstMetaInfo*)registered);
+  }
+  return info;
+}
+
+GstPickDetectMeta* gst_buffer_add_pickdetect_meta(GstBuffer* buffer) {
+  g_return_val_if_fail(GST_IS_BUFFER(buffer), NULL);
+  g_return_val_if_fail(gst_buffer_is_writable(buffer), NULL);
+  return (GstPickDetectMeta*)gst_buffer_add_meta(buffer, GST_PICKDETECT_META_INFO, NULL);
+}
+
+GstPickDetectMeta* gst_buffer_get_pickdetect_meta(GstBuffer* buffer) {
+  g_return_val_if_fail(GST_IS_BUFFER(buffer), NULL);
+  return (GstPickDetectMeta*)gst_buffer_get_meta(buffer, GST_PICKDETECT_META_API_TYPE);
+}
+
+guint gst_pickdetect_meta_get_n_instances(const GstPickDetectMeta* meta) {
+  g_return_val_if_fail(meta != NULL, 0);
+  return meta->n_instances;
+}
+
+const GstPickDetectInstance* gst_pickdetect_meta_get_instance(const GstPickDetectMeta* meta,
+                                                              guint index) {
+  g_return_val_if_fail(meta != NULL, NULL);
+  if (index >= meta->n_instances)
+    return NULL;
+  return &meta->instances[index];
+}
+
+const GstPickDetectInstance*
+gst_pickdetect_meta_add_instance(GstPickDetectMeta* meta, const GstPickDetectInstance* instance) {
+  g_return_val_if_fail(meta != NULL, NULL);
+  g_return_val_if_fail(instance != NULL, NULL);
+  meta->instances = g_renew(GstPickDetectInstance, meta->instances, meta->n_instances + 1);
+  GstPickDetectInstance* slot = &meta->instances[meta->n_instances];
+  instance_copy(slot, instance);
+  meta->n_instances++;
+  return slot;
+}

@@ -1,0 +1,134 @@
+/* SPDX-License-Identifier: LGPL-2.1-or-later
+ *
+ * GstPickDetectMeta: the object instances the pickdetect element found in a video frame.
+ *
+ * Every buffer that went through pickdetect carries exactly one GstPickDetectMeta (also when
+ * nothing was found: then it holds no instance). Coordinates are in pixels of the frame the meta
+ * is attached to, x to the right and y down; they follow the frame through videoscale (the meta
+ * is rescaled) and are copied unchanged on buffer copies and through videoconvert.
+ *
+ * Build against it with `pkg-config --cflags --libs gstreamer-pickdetect-meta-1.0`.
+ */
+#ifndef GST_PICKDETECT_META_H
+#define GST_PICKDETECT_META_H
+
+#include <gst/gst.h>
+
+G_BEGIN_DECLS
+
+#if defined(_WIN32) && !defined(GST_PICKDETECT_META_STATIC)
+#ifdef GST_PICKDETECT_META_BUILDING
+#define GST_PICKDETECT_META_API __declspec(dllexport) extern
+#else
+#define GST_PICKDETECT_META_API __declspec(dllimport) extern
+#endif
+#elif defined(GST_PICKDETECT_META_BUILDING)
+#define GST_PICKDETECT_META_API __attribute__((visibility("default"))) extern
+#else
+#define GST_PICKDETECT_META_API extern
+#endif
+
+/**
+ * GstPickDetectPoint:
+ * @x: column in pixels
+ * @y: row in pixels (y axis down)
+ */
+typedef struct {
+  gdouble x;
+  gdouble y;
+} GstPickDetectPoint;
+
+/**
+ * GstPickDetectInstance:
+ * @model_name: name of the model the instance is of (never %NULL in a meta)
+ * @center_x: centre column in pixels
+ * @center_y: centre row in pixels
+ * @angle: rotation in degrees in [0, 360), clockwise on screen
+ * @scale: size in the frame / size in the model picture
+ * @score: confidence in [0, 1]
+ * @matches: number of feature matches that support the instance
+ * @n_points: number of principal points
+ * @points: (array length=n_points): principal points; points[0] is the centre
+ * @n_outline: number of outline vertices
+ * @outline: (array length=n_outline): outline polygon
+ * @visibility: estimated share of the outline that lies in the frame, in [0, 1]
+ * @pickable: %TRUE when no other detected instance lies on this one
+ * @pick_order: 1 = pick first among the pickable instances, 2 = next, ...; 0 = not pickable
+ * @grasp_x: grasp point column in pixels
+ * @grasp_y: grasp point row in pixels
+ * @grasp_angle: gripper angle in degrees
+ *
+ * One object instance. Inside a meta every array belongs to the meta.
+ */
+typedef struct {
+  gchar* model_name;
+  gdouble center_x;
+  gdouble center_y;
+  gdouble angle;
+  gdouble scale;
+  gdouble score;
+  gint matches;
+  guint n_points;
+  GstPickDetectPoint* points;
+  guint n_outline;
+  GstPickDetectPoint* outline;
+  gdouble visibility;
+  gboolean pickable;
+  gint pick_order;
+  gdouble grasp_x;
+  gdouble grasp_y;
+  gdouble grasp_angle;
+} GstPickDetectInstance;
+
+typedef struct _GstPickDetectMeta GstPickDetectMeta;
+
+/**
+ * GstPickDetectMeta:
+ * @meta: parent #GstMeta
+ * @n_instances: number of instances
+ * @instances: (array length=n_instances): the instances, in the order the detector gave them
+ *
+ * Read it with gst_pickdetect_meta_get_n_instances() and gst_pickdetect_meta_get_instance().
+ */
+struct _GstPickDetectMeta {
+  GstMeta meta;
+  guint n_instances;
+  GstPickDetectInstance* instances;
+};
+
+#define GST_PICKDETECT_META_API_TYPE (gst_pickdetect_meta_api_get_type())
+#define GST_PICKDETECT_META_INFO (gst_pickdetect_meta_get_info())
+
+/* The registered API type ("GstPickDetectMetaAPI"), tagged video, size and orientation. */
+GST_PICKDETECT_META_API
+GType gst_pickdetect_meta_api_get_type(void);
+
+/* The implementation ("GstPickDetectMeta"): init, free and transform functions. */
+GST_PICKDETECT_META_API
+const GstMetaInfo* gst_pickdetect_meta_get_info(void);
+
+/* Adds an empty meta (no instance) to a writable buffer. */
+GST_PICKDETECT_META_API
+GstPickDetectMeta* gst_buffer_add_pickdetect_meta(GstBuffer* buffer);
+
+/* The buffer's first GstPickDetectMeta, or NULL. */
+GST_PICKDETECT_META_API
+GstPickDetectMeta* gst_buffer_get_pickdetect_meta(GstBuffer* buffer);
+
+GST_PICKDETECT_META_API
+guint gst_pickdetect_meta_get_n_instances(const GstPickDetectMeta* meta);
+
+/* The instance at index (< n_instances), owned by the meta, or NULL when out of range. */
+GST_PICKDETECT_META_API
+const GstPickDetectInstance* gst_pickdetect_meta_get_instance(const GstPickDetectMeta* meta,
+                                                              guint index);
+
+/* Appends a deep copy of instance (its strings and arrays are copied; the caller keeps its own)
+ * and returns the meta's copy. */
+GST_PICKDETECT_META_API
+const GstPickDetectInstance*
+gst_pickdetect_meta_add_instance(GstPickDetectMeta* meta, const GstPickDetectInstance* instance);
+
+G_END_DECLS
+
+#endif /* GST_PICKDETECT_META_H */
