@@ -8,8 +8,7 @@
 #ifdef HAVE_PICKDETECT_META
 #include <gst/pickdetect/pickdetect-meta.h>
 #endif
-#include <json-glib/json-glib.h>
-
+#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -145,42 +144,28 @@ std::string write_model_file(const Dataset& dataset, const ModelInfo& model,
     throw FormatError(dataset.file + ": models." + model.name + ".image: '" + picture +
                       "' does not exist");
   gchar* absolute = g_canonicalize_filename(picture.c_str(), nullptr);
-  JsonBuilder* b = json_builder_new();
-  json_builder_begin_object(b);
-  json_builder_set_member_name(b, "name");
-  json_builder_add_string_value(b, model.name.c_str());
-  json_builder_set_member_name(b, "image");
-  json_builder_add_string_value(b, absolute);
+  const std::string image(absolute);
   g_free(absolute);
-  auto points = [b](const char* key, const std::vector<Point>& pts) {
-    json_builder_set_member_name(b, key);
-    json_builder_begin_array(b);
-    for (const Point& p : pts) {
-      json_builder_begin_array(b);
-      json_builder_add_double_value(b, p.x);
-      json_builder_add_double_value(b, p.y);
-      json_builder_end_array(b);
-    }
-    json_builder_end_array(b);
-  };
-  points("principal_points", model.principal_points);
-  points("outline", model.polygon);
-  json_builder_end_object(b);
-  JsonGenerator* gen = json_generator_new();
-  JsonNode* root = json_builder_get_root(b);
-  json_generator_set_root(gen, root);
-  gchar* file = g_build_filename(folder.c_str(), (model.name + ".json").c_str(), nullptr);
+  gchar* file = g_build_filename(folder.c_str(), (model.name + ".yml").c_str(), nullptr);
   const std::string path(file);
   g_free(file);
-  GError* error = nullptr;
-  const gboolean ok = json_generator_to_file(gen, path.c_str(), &error);
-  json_node_unref(root);
-  g_object_unref(gen);
-  g_object_unref(b);
-  if (!ok) {
-    const std::string message = error ? error->message : "cannot be written";
-    g_clear_error(&error);
-    throw RunError("model file '" + path + "': " + message);
+  // The model file format of the core's load_model (written as its save_model does).
+  try {
+    cv::FileStorage store(path, cv::FileStorage::WRITE);
+    if (!store.isOpened())
+      throw RunError("model file '" + path + "' cannot be written");
+    store << "name" << model.name;
+    store << "image" << image;
+    auto points = [&store](const char* key, const std::vector<Point>& pts) {
+      store << key << "[";
+      for (const Point& p : pts)
+        store << "[:" << p.x << p.y << "]";
+      store << "]";
+    };
+    points("principal_points", model.principal_points);
+    points("outline", model.polygon);
+  } catch (const cv::Exception& e) {
+    throw RunError("model file '" + path + "' cannot be written: " + e.err);
   }
   return path;
 }
