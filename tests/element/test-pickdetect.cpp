@@ -1,0 +1,691 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Tests of the pickdetect element with GstHarness, on synthetic frames: copies of box.png pasted
+// at known poses onto a noisy background.
+// OpenCV comes before gstcheck.h, whose `fail` macro would clash with OpenCV's identifiers.
+#include <pickdetect/model.hpp>
+
+#include <opencv2/imgproc.hpp>
+
+#include <glib/gstdio.h>
+#include <gst/check/gstcheck.h>
+#include <gst/check/gstharness.h>
+#include <gst/pickdetect/pickdetect-meta.h>
+#include <gst/video/video.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#ifndef TEST_DATA_DIR
+#error "TEST_DATA_DIR must name the folder holding box.png"
+#endif
+
+namespace {
+
+const std::string kBoxPath = std::string(TEST_DATA_DIR) + "/box.png";
+
+const char* const kFormats[] = {"GRAY8", "RGB",  "BGR",  "RGBx", "BGRx", "xRGB", "xBGR", "RGBA",
+                                "BGRA",  "ARGB", "ABGR", "I420", "YV12", "NV12", "NV21"};
+
+struct Pose {
+  double x, y, angle, scale;
+};
+
+// Two instances that do not touch, turned and scaled differently.
+const Pose kPoses[] = {{180.0, 150.0, 30.0, 0.6}, {450.0, 320.0, 250.0, 0.7}};
+
+struct Truth {
+  cv::Point2d centre;
+  double angle;
+  double scale;
+};
+
+const pickdetect::Model& box_model() {
+  static const pickdetect::Model model = pickdetect::load_model(kBoxPath);
+  return model;
+}
+
+/// scene = scale * R(angle) * (model - model centre) + pose centre, clockwise on screen.
+cv::Mat pose_matrix(const Pose& pose, cv::Point2f model_centre) {
+  const double a = pose.angle * CV_PI / 180.0;
+  const double c = std::cos(a) * pose.scale, s = std::sin(a) * pose.scale;
+  cv::Mat m = (cv::Mat_<double>(2, 3) << c, -s, 0.0, s, c, 0.0);
+  m.at<double>(0, 2) = pose.x - (c * model_centre.x - s * model_centre.y);
+  m.at<double>(1, 2) = pose.y - (s * model_centre.x + c * model_centre.y);
+  return m;
+}
+
+/// A grey scene of the given size with the box at kPoses (those that fit), and the truth.
+cv::Mat make_scene(cv::Size size, std::vector<Truth>* truth, bool with_boxes = true) {
+  cv::Mat noise(size, CV_8UC1);
+  cv::RNG rng(1234);
+  rng.fill(noise, cv::RNG::UNIFORM, 0, 40);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
+  cv::Mat scene = noise + cv::Scalar(100);
+  if (!with_boxes)
+    return scene;
+
+  const pickdetect::Model& model = box_model();
+  const cv::Point2f centre = model.principal_points.at(0);
+  const cv::Mat ones(model.image.size(), CV_8UC1, cv::Scalar(255));
+  for (const Pose& pose : kPoses) {
+    const cv::Mat m = pose_matrix(pose, centre);
+    cv::Mat warped, mask;
+    cv::warpAffine(model.image, warped, m, size, cv::INTER_LINEAR);
+    cv::warpAffine(ones, mask, m, size, cv::INTER_NEAREST);
+    warped.copyTo(scene, mask);
+    if (truth)
+      truth->push_back(Truth{cv::Point2d(pose.x, pose.y), pose.angle, pose.scale});
+  }
+  return scene;
+}
+
+/// The grey scene in `format`: R = G = B = grey for RGB, Y = grey and neutral chroma for YUV,
+/// so every format carries the same grey picture. Strides are GStreamer's defaults.
+GstBuffer* scene_buffer(const cv::Mat& grey, const char* format) {
+  GstVideoInfo info;
+  fail_unless(
+      gst_video_info_set_format(&info, gst_video_format_from_string(format), grey.cols, grey.rows));
+  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
+  GstVideoFrame frame;
+  fail_unless(gst_video_frame_map(&frame, &info, buffer, GST_MAP_WRITE));
+  const GstVideoFormatInfo* finfo = info.finfo;
+  if (GST_VIDEO_FORMAT_INFO_IS_RGB(finfo)) {
+    const int pstride = GST_VIDEO_FRAME_COMP_PSTRIDE(&frame, 0);
+    const int alpha =
+        GST_VIDEO_FORMAT_INFO_HAS_ALPHA(finfo) ? GST_VIDEO_FRAME_COMP_POFFSET(&frame, 3) : -1;
+    for (int y = 0; y < grey.rows; y++) {
+      guint8* row = static_cast<guint8*>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) +
+                    y * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0);
+      for (int x = 0; x < grey.cols; x++) {
+        std::memset(row + x * pstride, grey.at<guint8>(y, x), pstride);
+        if (alpha >= 0)
+          row[x * pstride + alpha] = 255;
+      }
+    }
+  } else {
+    for (int y = 0; y < grey.rows; y++)
+      std::memcpy(static_cast<guint8*>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) +
+                      y * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0),
+                  grey.ptr(y), grey.cols);
+    for (guint p = 1; p < GST_VIDEO_FRAME_N_PLANES(&frame); p++)
+      std::memset(GST_VIDEO_FRAME_PLANE_DATA(&frame, p), 128,
+                  GST_VIDEO_FRAME_PLANE_STRIDE(&frame, p) *
+                      GST_VIDEO_FRAME_COMP_HEIGHT(&frame, p == 1 ? 1 : 2));
+  }
+  gst_video_frame_unmap(&frame);
+  GST_BUFFER_PTS(buffer) = 0;
+  GST_BUFFER_DURATION(buffer) = GST_SECOND / 30;
+  return buffer;
+}
+
+std::string caps_string(const char* format, cv::Size size) {
+  return "video/x-raw,format=" + std::string(format) + ",width=" + std::to_string(size.width) +
+         ",height=" + std::to_string(size.height) + ",framerate=30/1";
+}
+
+/// A harness around a lone pickdetect (h->element is the element) with the box model.
+GstHarness* pickdetect_harness(bool draw = false) {
+  GstElement* element = gst_element_factory_make("pickdetect", nullptr);
+  fail_unless(element != nullptr, "pickdetect not found: is GST_PLUGIN_PATH set?");
+  gst_object_ref_sink(element);
+  g_object_set(element, "model", kBoxPath.c_str(), "draw", draw, nullptr);
+  GstHarness* h = gst_harness_new_with_element(element, "sink", "src");
+  gst_object_unref(element);
+  return h;
+}
+
+/// The instances of the meta, left to right.
+std::vector<const GstPickDetectInstance*> sorted_instances(const GstPickDetectMeta* meta) {
+  std::vector<const GstPickDetectInstance*> out;
+  for (guint i = 0; i < gst_pickdetect_meta_get_n_instances(meta); i++)
+    out.push_back(gst_pickdetect_meta_get_instance(meta, i));
+  std::sort(out.begin(), out.end(), [](auto* a, auto* b) { return a->center_x < b->center_x; });
+  return out;
+}
+
+double angle_difference(double a, double b) {
+  const double d = std::fmod(std::fabs(a - b), 360.0);
+  return std::min(d, 360.0 - d);
+}
+
+void check_against_truth(const GstPickDetectMeta* meta, const std::vector<Truth>& truth,
+                         const char* format) {
+  const auto instances = sorted_instances(meta);
+  fail_unless_equals_int(instances.size(), truth.size());
+  for (size_t i = 0; i < truth.size(); i++) {
+    const GstPickDetectInstance* in = instances[i];
+    const double error =
+        std::hypot(in->center_x - truth[i].centre.x, in->center_y - truth[i].centre.y);
+    fail_unless(error < 1.5, "%s: instance %zu at (%.2f, %.2f), truth (%.2f, %.2f)", format, i,
+                in->center_x, in->center_y, truth[i].centre.x, truth[i].centre.y);
+    fail_unless(angle_difference(in->angle, truth[i].angle) < 3.0, "%s: angle %.2f, truth %.2f",
+                format, in->angle, truth[i].angle);
+    fail_unless(std::fabs(in->scale / truth[i].scale - 1.0) < 0.05, "%s: scale %.3f, truth %.3f",
+                format, in->scale, truth[i].scale);
+  }
+}
+
+/// The output buffer in RGB, for looking at colours whatever the format.
+cv::Mat to_rgb(GstBuffer* buffer, const char* format, cv::Size size) {
+  GstVideoInfo in_info, out_info;
+  gst_video_info_set_format(&in_info, gst_video_format_from_string(format), size.width,
+                            size.height);
+  gst_video_info_set_format(&out_info, GST_VIDEO_FORMAT_RGB, size.width, size.height);
+  GstBuffer* out = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&out_info), nullptr);
+  GstVideoFrame in_frame, out_frame;
+  fail_unless(gst_video_frame_map(&in_frame, &in_info, buffer, GST_MAP_READ));
+  fail_unless(gst_video_frame_map(&out_frame, &out_info, out, GST_MAP_WRITE));
+  GstVideoConverter* converter = gst_video_converter_new(&in_info, &out_info, nullptr);
+  gst_video_converter_frame(converter, &in_frame, &out_frame);
+  gst_video_converter_free(converter);
+  cv::Mat rgb(size, CV_8UC3);
+  for (int y = 0; y < size.height; y++)
+    std::memcpy(rgb.ptr(y),
+                static_cast<guint8*>(GST_VIDEO_FRAME_PLANE_DATA(&out_frame, 0)) +
+                    y * GST_VIDEO_FRAME_PLANE_STRIDE(&out_frame, 0),
+                size.width * 3);
+  gst_video_frame_unmap(&in_frame);
+  gst_video_frame_unmap(&out_frame);
+  gst_buffer_unref(out);
+  return rgb;
+}
+
+int count_pixels(const cv::Mat& rgb, cv::Vec3b lo, cv::Vec3b hi) {
+  cv::Mat mask;
+  cv::inRange(rgb, lo, hi, mask);
+  return cv::countNonZero(mask);
+}
+
+} // namespace
+
+// Every format finds the same instances, at the truth, and leaves the pixels alone.
+GST_START_TEST(test_formats_same_instances) {
+  const cv::Size size(638, 478); // Odd strides: rows are padded in GRAY8, RGB and YUV.
+  std::vector<Truth> truth;
+  const cv::Mat scene = make_scene(size, &truth);
+  std::vector<GstPickDetectInstance> reference;
+
+  for (const char* format : kFormats) {
+    GstHarness* h = pickdetect_harness(false);
+    gst_harness_set_src_caps_str(h, caps_string(format, size).c_str());
+    GstBuffer* in = scene_buffer(scene, format);
+    GstBuffer* original = gst_buffer_copy_deep(in);
+    GstBuffer* out = gst_harness_push_and_pull(h, in);
+    fail_unless(out != nullptr, "%s: no output", format);
+
+    // draw=false: bit-identical pixels.
+    GstMapInfo map;
+    fail_unless(gst_buffer_map(out, &map, GST_MAP_READ));
+    fail_unless_equals_int(map.size, gst_buffer_get_size(original));
+    fail_unless(gst_buffer_memcmp(original, 0, map.data, map.size) == 0, "%s: pixels changed",
+                format);
+    gst_buffer_unmap(out, &map);
+
+    const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
+    fail_unless(meta != nullptr, "%s: no meta", format);
+    check_against_truth(meta, truth, format);
+
+    const auto instances = sorted_instances(meta);
+    if (reference.empty()) {
+      for (const GstPickDetectInstance* in_ : instances)
+        reference.push_back(*in_); // Shallow: only the numbers are compared.
+    } else {
+      for (size_t i = 0; i < reference.size(); i++) {
+        const double d = std::hypot(instances[i]->center_x - reference[i].center_x,
+                                    instances[i]->center_y - reference[i].center_y);
+        fail_unless(d < 0.5, "%s: instance %zu is %.3f px from GRAY8's", format, i, d);
+      }
+    }
+    gst_buffer_unref(original);
+    gst_buffer_unref(out);
+    gst_harness_teardown(h);
+  }
+}
+GST_END_TEST;
+
+// draw=true draws the outline, the centre and the points in the right colours in every format.
+GST_START_TEST(test_draw_colours) {
+  const cv::Size size(640, 480);
+  const cv::Mat scene = make_scene(size, nullptr);
+
+  for (const char* format : kFormats) {
+    GstHarness* h = pickdetect_harness(true);
+    gst_harness_set_src_caps_str(h, caps_string(format, size).c_str());
+    GstBuffer* in = scene_buffer(scene, format);
+    GstBuffer* original = gst_buffer_copy_deep(in);
+    GstBuffer* out = gst_harness_push_and_pull(h, in);
+    fail_unless(out != nullptr);
+
+    GstMapInfo map;
+    fail_unless(gst_buffer_map(out, &map, GST_MAP_READ));
+    fail_unless(gst_buffer_memcmp(original, 0, map.data, map.size) != 0, "%s: nothing drawn",
+                format);
+    gst_buffer_unmap(out, &map);
+
+    const cv::Mat before = to_rgb(original, format, size);
+    const cv::Mat after = to_rgb(out, format, size);
+    const bool grey = std::strcmp(format, "GRAY8") == 0;
+    // The scene is grey, so any coloured pixel comes from the overlay.
+    const int green_before = count_pixels(before, {0, 170, 0}, {90, 255, 90});
+    const int green = count_pixels(after, {0, 170, 0}, {90, 255, 90});
+    const int blue = count_pixels(after, {0, 0, 170}, {90, 90, 255});
+    const int white = count_pixels(after, {250, 250, 250}, {255, 255, 255});
+    const int white_before = count_pixels(before, {250, 250, 250}, {255, 255, 255});
+    fail_unless_equals_int(green_before, 0);
+    fail_unless(white > white_before + 200, "%s: outline missing (%d white pixels, %d before)",
+                format, white, white_before);
+    if (grey) {
+      // Grey levels: the green centre circle is drawn at green's luma (150).
+      const int luma_green = count_pixels(after, {145, 145, 145}, {155, 155, 155});
+      const int luma_green_before = count_pixels(before, {145, 145, 145}, {155, 155, 155});
+      fail_unless(luma_green > luma_green_before + 50, "GRAY8: centre circle missing");
+    } else {
+      fail_unless(green > 100, "%s: only %d green pixels", format, green);
+      fail_unless(blue > 10, "%s: only %d blue pixels", format, blue);
+    }
+    gst_buffer_unref(original);
+    gst_buffer_unref(out);
+    gst_harness_teardown(h);
+  }
+}
+GST_END_TEST;
+
+static const GstStructure* roi_param(GstVideoRegionOfInterestMeta* roi) {
+  return gst_video_region_of_interest_meta_get_param(roi, "pick-instance");
+}
+
+static std::vector<double> double_array(const GstStructure* s, const char* field) {
+  const GValue* v = gst_structure_get_value(s, field);
+  fail_unless(v != nullptr && GST_VALUE_HOLDS_ARRAY(v), "field %s is not an array", field);
+  std::vector<double> out;
+  for (guint i = 0; i < gst_value_array_get_size(v); i++) {
+    const GValue* item = gst_value_array_get_value(v, i);
+    fail_unless(G_VALUE_HOLDS_DOUBLE(item));
+    out.push_back(g_value_get_double(item));
+  }
+  return out;
+}
+
+static void check_structure_matches(const GstStructure* s, const GstPickDetectInstance* in) {
+  fail_unless(gst_structure_has_name(s, "pick-instance"));
+  double d;
+  gint i;
+  gboolean b;
+  fail_unless_equals_string(gst_structure_get_string(s, "model"), in->model_name);
+  fail_unless(gst_structure_get_double(s, "center-x", &d) && d == in->center_x);
+  fail_unless(gst_structure_get_double(s, "center-y", &d) && d == in->center_y);
+  fail_unless(gst_structure_get_double(s, "angle", &d) && d == in->angle);
+  fail_unless(gst_structure_get_double(s, "scale", &d) && d == in->scale);
+  fail_unless(gst_structure_get_double(s, "score", &d) && d == in->score);
+  fail_unless(gst_structure_get_double(s, "visibility", &d) && d == in->visibility);
+  fail_unless(gst_structure_get_double(s, "grasp-x", &d) && d == in->grasp_x);
+  fail_unless(gst_structure_get_double(s, "grasp-y", &d) && d == in->grasp_y);
+  fail_unless(gst_structure_get_double(s, "grasp-angle", &d) && d == in->grasp_angle);
+  fail_unless(gst_structure_get_int(s, "matches", &i) && i == in->matches);
+  fail_unless(gst_structure_get_int(s, "pick-order", &i) && i == in->pick_order);
+  fail_unless(gst_structure_get_boolean(s, "pickable", &b) && !b == !in->pickable);
+  const std::vector<double> points = double_array(s, "points");
+  fail_unless_equals_int(points.size(), 2 * in->n_points);
+  for (guint k = 0; k < in->n_points; k++)
+    fail_unless(points[2 * k] == in->points[k].x && points[2 * k + 1] == in->points[k].y);
+  fail_unless(points[0] == in->center_x && points[1] == in->center_y,
+              "points[0] is not the centre");
+  const std::vector<double> outline = double_array(s, "outline");
+  fail_unless_equals_int(outline.size(), 2 * in->n_outline);
+  for (guint k = 0; k < in->n_outline; k++)
+    fail_unless(outline[2 * k] == in->outline[k].x && outline[2 * k + 1] == in->outline[k].y);
+}
+
+// The custom meta, the ROI metas and the bus message all tell the same instances.
+GST_START_TEST(test_meta_roi_message) {
+  const cv::Size size(640, 480);
+  std::vector<Truth> truth;
+  const cv::Mat scene = make_scene(size, &truth);
+
+  GstHarness* h = pickdetect_harness();
+  gboolean post = FALSE;
+  g_object_get(h->element, "post-messages", &post, nullptr);
+  fail_unless(post, "post-messages is on by default");
+  GstBus* bus = gst_bus_new();
+  gst_element_set_bus(h->element, bus);
+  gst_harness_set_src_caps_str(h, caps_string("GRAY8", size).c_str());
+  GstBuffer* in = scene_buffer(scene, "GRAY8");
+  GST_BUFFER_PTS(in) = 5 * GST_SECOND;
+  GstBuffer* out = gst_harness_push_and_pull(h, in);
+  fail_unless(out != nullptr);
+
+  const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
+  fail_unless(meta != nullptr);
+  check_against_truth(meta, truth, "GRAY8");
+  fail_unless(gst_pickdetect_meta_get_instance(meta, meta->n_instances) == nullptr);
+  for (guint k = 0; k < meta->n_instances; k++) {
+    const GstPickDetectInstance* in_ = gst_pickdetect_meta_get_instance(meta, k);
+    fail_unless_equals_string(in_->model_name, "box");
+    fail_unless(in_->matches >= 6);
+    fail_unless(in_->score > 0.0 && in_->score <= 1.0);
+    fail_unless(in_->n_points >= 1 && in_->n_outline >= 3);
+    fail_unless(in_->points[0].x == in_->center_x && in_->points[0].y == in_->center_y);
+    fail_unless(in_->visibility > 0.9);
+    fail_unless(in_->pickable); // The two boxes do not overlap.
+    fail_unless(in_->pick_order >= 1 && in_->pick_order <= 2);
+  }
+
+  // One ROI per instance, unique ids, the outline's box, the same numbers.
+  std::vector<gint> ids;
+  gpointer state = nullptr;
+  guint n_roi = 0;
+  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
+             out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
+    auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+    fail_unless_equals_string(g_quark_to_string(roi->roi_type), "box");
+    fail_unless(std::find(ids.begin(), ids.end(), roi->id) == ids.end(), "duplicate ROI id");
+    ids.push_back(roi->id);
+    const GstStructure* s = roi_param(roi);
+    fail_unless(s != nullptr);
+    double cx, cy;
+    fail_unless(gst_structure_get_double(s, "center-x", &cx));
+    fail_unless(gst_structure_get_double(s, "center-y", &cy));
+    const GstPickDetectInstance* match = nullptr;
+    for (guint k = 0; k < meta->n_instances; k++)
+      if (meta->instances[k].center_x == cx && meta->instances[k].center_y == cy)
+        match = &meta->instances[k];
+    fail_unless(match != nullptr, "ROI without its instance");
+    check_structure_matches(s, match);
+    double x0 = 1e9, y0 = 1e9, x1 = -1e9, y1 = -1e9;
+    for (guint k = 0; k < match->n_outline; k++) {
+      x0 = std::min(x0, match->outline[k].x);
+      y0 = std::min(y0, match->outline[k].y);
+      x1 = std::max(x1, match->outline[k].x);
+      y1 = std::max(y1, match->outline[k].y);
+    }
+    fail_unless(std::fabs(roi->x - std::max(0.0, x0)) <= 1.0 &&
+                std::fabs(roi->y - std::max(0.0, y0)) <= 1.0);
+    fail_unless(std::fabs(roi->x + roi->w - std::min(640.0, x1)) <= 1.0 &&
+                std::fabs(roi->y + roi->h - std::min(480.0, y1)) <= 1.0);
+    fail_unless(roi->x + roi->w <= 640 && roi->y + roi->h <= 480);
+    n_roi++;
+  }
+  fail_unless_equals_int(n_roi, meta->n_instances);
+
+  // The bus message.
+  GstMessage* msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT);
+  fail_unless(msg != nullptr, "no element message");
+  const GstStructure* s = gst_message_get_structure(msg);
+  fail_unless(gst_structure_has_name(s, "pickdetect"));
+  guint64 ts, running, stream;
+  fail_unless(gst_structure_get_uint64(s, "timestamp", &ts) && ts == 5 * GST_SECOND);
+  fail_unless(gst_structure_get_uint64(s, "running-time", &running) && running == 5 * GST_SECOND);
+  fail_unless(gst_structure_get_uint64(s, "stream-time", &stream) && stream == 5 * GST_SECOND);
+  const GValue* list = gst_structure_get_value(s, "instances");
+  fail_unless(list != nullptr && GST_VALUE_HOLDS_LIST(list));
+  fail_unless_equals_int(gst_value_list_get_size(list), meta->n_instances);
+  for (guint k = 0; k < gst_value_list_get_size(list); k++) {
+    const GstStructure* item = gst_value_get_structure(gst_value_list_get_value(list, k));
+    check_structure_matches(item, gst_pickdetect_meta_get_instance(meta, k));
+  }
+  gst_message_unref(msg);
+  gst_buffer_unref(out);
+
+  // Nothing in the frame: still a meta (empty), no ROI, a message with an empty list.
+  out = gst_harness_push_and_pull(h, scene_buffer(make_scene(size, nullptr, false), "GRAY8"));
+  meta = gst_buffer_get_pickdetect_meta(out);
+  fail_unless(meta != nullptr);
+  fail_unless_equals_int(gst_pickdetect_meta_get_n_instances(meta), 0);
+  fail_unless(gst_buffer_get_video_region_of_interest_meta(out) == nullptr);
+  msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT);
+  fail_unless(msg != nullptr);
+  fail_unless_equals_int(
+      gst_value_list_get_size(gst_structure_get_value(gst_message_get_structure(msg), "instances")),
+      0);
+  gst_message_unref(msg);
+  gst_buffer_unref(out);
+
+  // post-messages=false: no message.
+  g_object_set(h->element, "post-messages", FALSE, nullptr);
+  gst_buffer_unref(gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8")));
+  fail_unless(gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT) == nullptr);
+
+  gst_element_set_bus(h->element, nullptr);
+  gst_object_unref(bus);
+  gst_harness_teardown(h);
+}
+GST_END_TEST;
+
+/// Runs `launch` (starting with pickdetect) on one 640x480 GRAY8 scene and returns the output.
+static GstBuffer* run_chain(const std::string& launch, const cv::Mat& scene) {
+  GstHarness* h = gst_harness_new_parse(launch.c_str());
+  gst_harness_set_src_caps_str(h, caps_string("GRAY8", cv::Size(scene.cols, scene.rows)).c_str());
+  GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
+  gst_harness_teardown(h);
+  return out;
+}
+
+// videoscale halves every coordinate of the custom meta; videoconvert keeps it as it is.
+GST_START_TEST(test_meta_through_videoscale_videoconvert) {
+  const cv::Mat scene = make_scene(cv::Size(640, 480), nullptr);
+  const std::string pd = "pickdetect model=\"" + kBoxPath + "\" ";
+  GstBuffer* ref = run_chain(pd, scene);
+  GstBuffer* scaled = run_chain(
+      pd + "! videoscale ! capsfilter caps=video/x-raw,width=320,height=240,format=GRAY8", scene);
+  GstBuffer* converted =
+      run_chain(pd + "! videoconvert ! capsfilter caps=video/x-raw,format=I420", scene);
+
+  const GstPickDetectMeta* r = gst_buffer_get_pickdetect_meta(ref);
+  const GstPickDetectMeta* s = gst_buffer_get_pickdetect_meta(scaled);
+  const GstPickDetectMeta* c = gst_buffer_get_pickdetect_meta(converted);
+  fail_unless(r && s && c);
+  fail_unless_equals_int(gst_buffer_get_size(scaled), 320 * 240);
+  fail_unless_equals_int(r->n_instances, 2);
+  fail_unless_equals_int(s->n_instances, r->n_instances);
+  fail_unless_equals_int(c->n_instances, r->n_instances);
+  for (guint k = 0; k < r->n_instances; k++) {
+    const GstPickDetectInstance* a = &r->instances[k];
+    const GstPickDetectInstance* b = &s->instances[k];
+    const GstPickDetectInstance* d = &c->instances[k];
+    fail_unless_equals_string(b->model_name, a->model_name);
+    fail_unless(std::fabs(b->center_x - a->center_x / 2) < 1e-9);
+    fail_unless(std::fabs(b->center_y - a->center_y / 2) < 1e-9);
+    fail_unless(std::fabs(b->grasp_x - a->grasp_x / 2) < 1e-9);
+    fail_unless(std::fabs(b->scale - a->scale / 2) < 1e-9);
+    fail_unless(std::fabs(b->angle - a->angle) < 1e-9);
+    fail_unless_equals_int(b->n_points, a->n_points);
+    fail_unless_equals_int(b->n_outline, a->n_outline);
+    for (guint p = 0; p < a->n_points; p++)
+      fail_unless(std::fabs(b->points[p].x - a->points[p].x / 2) < 1e-9 &&
+                  std::fabs(b->points[p].y - a->points[p].y / 2) < 1e-9);
+    for (guint p = 0; p < a->n_outline; p++)
+      fail_unless(std::fabs(b->outline[p].x - a->outline[p].x / 2) < 1e-9 &&
+                  std::fabs(b->outline[p].y - a->outline[p].y / 2) < 1e-9);
+    fail_unless(b->points != a->points && b->outline != a->outline); // Own copies.
+
+    fail_unless_equals_string(d->model_name, a->model_name);
+    fail_unless(d->center_x == a->center_x && d->center_y == a->center_y && d->angle == a->angle &&
+                d->scale == a->scale && d->score == a->score && d->matches == a->matches &&
+                d->visibility == a->visibility && d->pickable == a->pickable &&
+                d->pick_order == a->pick_order && d->grasp_x == a->grasp_x &&
+                d->grasp_y == a->grasp_y && d->grasp_angle == a->grasp_angle);
+    fail_unless(d->n_points == a->n_points && d->n_outline == a->n_outline);
+    fail_unless(std::memcmp(d->points, a->points, sizeof(GstPickDetectPoint) * a->n_points) == 0);
+    fail_unless(std::memcmp(d->outline, a->outline, sizeof(GstPickDetectPoint) * a->n_outline) ==
+                0);
+  }
+  gst_buffer_unref(ref);
+  gst_buffer_unref(scaled);
+  gst_buffer_unref(converted);
+}
+GST_END_TEST;
+
+struct SwapState {
+  GstHarness* h;
+  cv::Mat scene;
+  std::atomic<bool> stop{false};
+  std::atomic<int> frames{0};
+  std::vector<std::string> models; ///< Model of each frame ("" = none found), pusher only.
+  bool mixed = false;              ///< A frame had instances of two models.
+};
+
+static gpointer push_frames(gpointer data) {
+  auto* st = static_cast<SwapState*>(data);
+  while (!st->stop.load()) {
+    GstBuffer* out = gst_harness_push_and_pull(st->h, scene_buffer(st->scene, "GRAY8"));
+    if (!out)
+      break;
+    const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
+    std::string model;
+    for (guint k = 0; meta && k < meta->n_instances; k++) {
+      if (!model.empty() && model != meta->instances[k].model_name)
+        st->mixed = true;
+      model = meta->instances[k].model_name;
+    }
+    st->models.push_back(meta ? model : "<no meta>");
+    gst_buffer_unref(out);
+    st->frames.fetch_add(1);
+  }
+  return nullptr;
+}
+
+static void wait_frames(const SwapState& st, int n) {
+  const gint64 deadline = g_get_monotonic_time() + 120 * G_TIME_SPAN_SECOND;
+  while (st.frames.load() < n && g_get_monotonic_time() < deadline)
+    g_usleep(2000);
+  fail_unless(st.frames.load() >= n, "frames stopped flowing");
+}
+
+// Swapping the model from another thread while frames flow: no crash, no frame with two models,
+// every frame started after the swap uses the new model; a bad model keeps the old one.
+GST_START_TEST(test_model_swap_while_playing) {
+  gchar* dir = g_dir_make_tmp("pickdetect-XXXXXX", nullptr);
+  fail_unless(dir != nullptr);
+  gchar* contents;
+  gsize length;
+  fail_unless(g_file_get_contents(kBoxPath.c_str(), &contents, &length, nullptr));
+  gchar* crate = g_build_filename(dir, "crate.png", nullptr);
+  fail_unless(g_file_set_contents(crate, contents, length, nullptr));
+  g_free(contents);
+  gchar* broken = g_build_filename(dir, "broken.yml", nullptr);
+  fail_unless(g_file_set_contents(broken, "this: [is not a model", -1, nullptr));
+
+  SwapState st;
+  st.h = pickdetect_harness();
+  st.scene = make_scene(cv::Size(640, 480), nullptr);
+  GstBus* bus = gst_bus_new();
+  gst_element_set_bus(st.h->element, bus);
+  gst_harness_set_src_caps_str(st.h, caps_string("GRAY8", cv::Size(640, 480)).c_str());
+  GThread* pusher = g_thread_new("pusher", push_frames, &st);
+
+  wait_frames(st, 2);
+  g_object_set(st.h->element, "model", crate, nullptr); // Returns once the swap is done.
+  const int swapped_at = st.frames.load();
+  wait_frames(st, swapped_at + 3);
+
+  // A model that cannot be loaded: a warning, the old model stays.
+  g_object_set(st.h->element, "model", broken, nullptr);
+  gchar* model = nullptr;
+  g_object_get(st.h->element, "model", &model, nullptr);
+  fail_unless_equals_string(model, crate);
+  g_free(model);
+  const int broken_at = st.frames.load();
+  wait_frames(st, broken_at + 3);
+
+  st.stop = true;
+  g_thread_join(pusher);
+
+  fail_unless(!st.mixed, "a frame mixed two models");
+  const int n = static_cast<int>(st.models.size());
+  for (int i = 0; i < n; i++) {
+    if (i < 2)
+      fail_unless_equals_string(st.models[i].c_str(), "box");
+    if (i > swapped_at) // Frame swapped_at may have begun before the swap.
+      fail_unless_equals_string(st.models[i].c_str(), "crate");
+  }
+  GstMessage* msg = gst_bus_pop_filtered(bus, GST_MESSAGE_WARNING);
+  fail_unless(msg != nullptr, "no warning for the broken model");
+  GError* err = nullptr;
+  gst_message_parse_warning(msg, &err, nullptr);
+  fail_unless(err->domain == GST_RESOURCE_ERROR);
+  fail_unless(std::strstr(err->message, "broken.yml") != nullptr, "%s", err->message);
+  g_error_free(err);
+  gst_message_unref(msg);
+
+  gst_element_set_bus(st.h->element, nullptr);
+  gst_object_unref(bus);
+  gst_harness_teardown(st.h);
+  g_unlink(crate);
+  g_unlink(broken);
+  g_rmdir(dir);
+  g_free(crate);
+  g_free(broken);
+  g_free(dir);
+}
+GST_END_TEST;
+
+/// Starts "videotestsrc ! pickdetect <props> ! fakesink"; returns the error of the failed start.
+static GError* start_error(const char* props) {
+  gchar* launch = g_strdup_printf("videotestsrc num-buffers=1 ! pickdetect %s ! fakesink", props);
+  GstElement* pipeline = gst_parse_launch(launch, nullptr);
+  g_free(launch);
+  fail_unless(pipeline != nullptr);
+  fail_unless_equals_int(gst_element_set_state(pipeline, GST_STATE_PAUSED),
+                         GST_STATE_CHANGE_FAILURE);
+  GstBus* bus = gst_element_get_bus(pipeline);
+  GstMessage* msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ERROR);
+  fail_unless(msg != nullptr, "no error message");
+  GError* err = nullptr;
+  gst_message_parse_error(msg, &err, nullptr);
+  gst_message_unref(msg);
+  gst_object_unref(bus);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(pipeline);
+  return err;
+}
+
+// A missing, invalid or absent model fails the start with an error naming the file and why.
+GST_START_TEST(test_model_errors) {
+  GError* err = start_error("model=/nonexistent/folder/parts.yml");
+  fail_unless(g_error_matches(err, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND), "%s",
+              err->message);
+  fail_unless(std::strstr(err->message, "/nonexistent/folder/parts.yml") != nullptr, "%s",
+              err->message);
+  g_error_free(err);
+
+  gchar* dir = g_dir_make_tmp("pickdetect-XXXXXX", nullptr);
+  gchar* bad = g_build_filename(dir, "bad.yml", nullptr);
+  fail_unless(g_file_set_contents(bad, "%YAML:1.0\nnot: [a model\n", -1, nullptr));
+  gchar* props = g_strdup_printf("model=\"%s\"", bad);
+  err = start_error(props);
+  fail_unless(g_error_matches(err, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_SETTINGS), "%s",
+              err->message);
+  fail_unless(std::strstr(err->message, bad) != nullptr, "%s", err->message);
+  g_error_free(err);
+  g_free(props);
+  g_unlink(bad);
+  g_rmdir(dir);
+  g_free(bad);
+  g_free(dir);
+
+  err = start_error("");
+  fail_unless(g_error_matches(err, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND));
+  fail_unless(std::strstr(err->message, "\"model\"") != nullptr, "%s", err->message);
+  g_error_free(err);
+}
+GST_END_TEST;
+
+static Suite* pickdetect_suite(void) {
+  Suite* s = suite_create("pickdetect");
+  TCase* tc = tcase_create("element");
+  tcase_set_timeout(tc, 600);
+  suite_add_tcase(s, tc);
+  tcase_add_test(tc, test_model_errors);
+  tcase_add_test(tc, test_meta_roi_message);
+  tcase_add_test(tc, test_formats_same_instances);
+  tcase_add_test(tc, test_draw_colours);
+  tcase_add_test(tc, test_meta_through_videoscale_videoconvert);
+  tcase_add_test(tc, test_model_swap_while_playing);
+  return s;
+}
+
+GST_CHECK_MAIN(pickdetect);
