@@ -1,0 +1,44 @@
+#!/bin/sh
+# SPDX-License-Identifier: LGPL-2.1-or-later
+# Live detection from a V4L2 camera, drawn on screen. A template: adapt the caps to your camera.
+#
+#   pipelines/live-camera.sh MODEL [DEVICE]
+#
+# MODEL is a model file (.yml) or a picture of the object; DEVICE defaults to /dev/video0.
+# Environment:
+#   CAPS    caps asked of the camera (default video/x-raw,width=640,height=480); pickdetect's
+#           cost grows with the frame size (SIFT), 640x480 runs at a few frames per second
+#   SOURCE  replaces the camera, e.g. SOURCE="videotestsrc is-live=true" to try the pipeline
+#   SINK    replaces the display (default autovideosink), e.g. SINK=fakesink
+#   PICKDETECT_BUILD_DIR=<builddir> or GST_PLUGIN_PATH=<builddir>/gst to use the uninstalled
+#           plugin
+#
+# The leaky queue drops camera frames while pickdetect is busy, so the picture stays live rather
+# than lagging ever further behind; sync=false shows each frame as soon as it is ready. Bus
+# messages with the instances are printed by -m (post-messages is on by default).
+set -eu
+
+if [ $# -lt 1 ]; then
+  sed -n '3,20p' "$0" >&2
+  exit 2
+fi
+model=$1
+device=${2:-/dev/video0}
+caps=${CAPS:-video/x-raw,width=640,height=480}
+source=${SOURCE:-v4l2src device=$device}
+sink=${SINK:-autovideosink}
+
+if [ -n "${PICKDETECT_BUILD_DIR:-}" ]; then
+  GST_PLUGIN_PATH="$PICKDETECT_BUILD_DIR/gst${GST_PLUGIN_PATH:+:$GST_PLUGIN_PATH}"
+  export GST_PLUGIN_PATH
+fi
+gst-inspect-1.0 pickdetect >/dev/null 2>&1 || {
+  echo "pickdetect not found: set GST_PLUGIN_PATH=<builddir>/gst or PICKDETECT_BUILD_DIR=<builddir>" >&2
+  exit 1
+}
+
+# shellcheck disable=SC2086 # $source and $sink are pipeline fragments.
+exec gst-launch-1.0 -m $source ! "$caps" ! videoconvert ! video/x-raw,format=I420 ! \
+  queue leaky=downstream max-size-buffers=1 ! \
+  pickdetect model="$model" draw=true ! \
+  videoconvert ! $sink sync=false
