@@ -22,6 +22,8 @@
  *   with fields model (string), center-x, center-y, angle, scale, score, visibility, grasp-x,
  *   grasp-y, grasp-angle (double), matches, pick-order (int), pickable (boolean), points and
  *   outline (#GstValueArray of doubles x0, y0, x1, y1, ...; points starts with the centre).
+ *   Through videoscale GStreamer rescales the ROI rectangle but copies its params as they are,
+ *   so after scaling read coordinates from the GstPickDetectMeta, which is rescaled whole.
  *
  * With #GstPickDetect:post-messages (the default, as facedetect's updates=every_frame), an
  * element message named "pickdetect" is posted for each frame, with fields timestamp,
@@ -793,9 +795,10 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
                           0.0, G_MAXDOUBLE, DEFAULT_BANDWIDTH, flags));
   g_object_class_install_property(
       gobject_class, PROP_MAX_INSTANCES,
-      g_param_spec_int("max-instances", "Maximum instances",
-                       "At most this many instances per frame, best first; 0 = no limit", 0,
-                       G_MAXINT, DEFAULT_MAX_INSTANCES, flags));
+      g_param_spec_int(
+          "max-instances", "Maximum instances",
+          "At most this many instances of the model per frame, best first; 0 = no limit", 0,
+          G_MAXINT, DEFAULT_MAX_INSTANCES, flags));
   g_object_class_install_property(
       gobject_class, PROP_ALLOW_SCALE,
       g_param_spec_boolean("allow-scale", "Allow scale",

@@ -449,6 +449,18 @@ GST_START_TEST(test_meta_roi_message) {
   gst_buffer_unref(gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8")));
   fail_unless(gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT) == nullptr);
 
+  // Settings changed while playing apply from the next frame on.
+  g_object_set(h->element, "max-instances", 1, nullptr);
+  out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
+  fail_unless_equals_int(gst_pickdetect_meta_get_n_instances(gst_buffer_get_pickdetect_meta(out)),
+                         1);
+  gst_buffer_unref(out);
+  g_object_set(h->element, "max-instances", 0, "min-matches", 100000, nullptr);
+  out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
+  fail_unless_equals_int(gst_pickdetect_meta_get_n_instances(gst_buffer_get_pickdetect_meta(out)),
+                         0);
+  gst_buffer_unref(out);
+
   gst_element_set_bus(h->element, nullptr);
   gst_object_unref(bus);
   gst_harness_teardown(h);
@@ -666,6 +678,15 @@ GST_START_TEST(test_model_errors) {
   g_rmdir(dir);
   g_free(bad);
   g_free(dir);
+
+  // A folder is not readable as a model.
+  props = g_strdup_printf("model=\"%s\"", TEST_DATA_DIR);
+  err = start_error(props);
+  fail_unless(g_error_matches(err, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_OPEN_READ), "%s",
+              err->message);
+  fail_unless(std::strstr(err->message, TEST_DATA_DIR) != nullptr, "%s", err->message);
+  g_error_free(err);
+  g_free(props);
 
   err = start_error("");
   fail_unless(g_error_matches(err, GST_RESOURCE_ERROR, GST_RESOURCE_ERROR_NOT_FOUND));
