@@ -367,3 +367,18 @@ TEST(Dataset, DetectionsRoundTrip) {
     EXPECT_STREQ(e.what(), "det.jsonl:1: instances[0].model: expected a string, got a number");
   }
 }
+
+TEST(Geometry, SelfCrossingOutlinesCountAsTheirHull) {
+  // A bow tie (a folded square): its lobes cancel in the shoelace sum.
+  const Polygon bow = {{0, 0}, {10, 10}, {10, 0}, {0, 10}};
+  EXPECT_DOUBLE_EQ(signed_area(bow), 0.0);
+  EXPECT_TRUE(self_intersects(bow));
+  EXPECT_FALSE(self_intersects(rect(0, 0, 10, 10)));
+  EXPECT_FALSE(self_intersects(ell()));
+  EXPECT_DOUBLE_EQ(area(convex_hull(bow)), 100.0);
+  EXPECT_DOUBLE_EQ(frame_area(bow, 100, 100), 100.0);
+  EXPECT_DOUBLE_EQ(frame_area(bow, 5, 100), 50.0);
+  EXPECT_DOUBLE_EQ(frame_overlap(bow, rect(0, 0, 10, 10), 100, 100).iou(), 1.0);
+  // Collinear points drop out of the hull.
+  EXPECT_EQ(convex_hull({{0, 0}, {5, 0}, {10, 0}, {10, 10}, {0, 10}}).size(), 4u);
+}

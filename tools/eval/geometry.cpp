@@ -76,6 +76,54 @@ Polygon oriented(const Polygon& polygon) {
   return Polygon(polygon.rbegin(), polygon.rend());
 }
 
+bool self_intersects(const Polygon& polygon) {
+  const size_t n = polygon.size();
+  auto opposite = [](double a, double b) { return (a > 0.0 && b < 0.0) || (a < 0.0 && b > 0.0); };
+  for (size_t i = 0; i < n; ++i) {
+    const Point& a = polygon[i];
+    const Point& b = polygon[(i + 1) % n];
+    for (size_t j = i + 2; j < n; ++j) {
+      if (i == 0 && j == n - 1)
+        continue; // Adjacent through the closing edge.
+      const Point& c = polygon[j];
+      const Point& d = polygon[(j + 1) % n];
+      if (opposite(cross(a, b, c), cross(a, b, d)) && opposite(cross(c, d, a), cross(c, d, b)))
+        return true;
+    }
+  }
+  return false;
+}
+
+Polygon convex_hull(const Polygon& polygon) {
+  Polygon pts = polygon;
+  std::sort(pts.begin(), pts.end(),
+            [](const Point& p, const Point& q) { return p.x < q.x || (p.x == q.x && p.y < q.y); });
+  if (pts.size() < 3)
+    return pts;
+  Polygon hull(2 * pts.size());
+  size_t k = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0.0)
+      --k;
+    hull[k++] = pts[i];
+  }
+  for (size_t i = pts.size() - 1, lower = k + 1; i-- > 0;) {
+    while (k >= lower && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0.0)
+      --k;
+    hull[k++] = pts[i];
+  }
+  hull.resize(k - 1);
+  return hull;
+}
+
+Polygon normalized(const Polygon& polygon) {
+  return oriented(self_intersects(polygon) ? convex_hull(polygon) : polygon);
+}
+
+double frame_area(const Polygon& polygon, double width, double height) {
+  return std::max(0.0, signed_area(clip_to_frame(normalized(polygon), width, height)));
+}
+
 Polygon clip_convex(const Polygon& subject, const Polygon& clip) {
   if (subject.size() < 3 || clip.size() < 3)
     return {};
@@ -118,8 +166,8 @@ double Overlap::iou() const {
 }
 
 Overlap frame_overlap(const Polygon& a, const Polygon& b, double width, double height) {
-  const Polygon ca = clip_to_frame(oriented(a), width, height);
-  const Polygon cb = clip_to_frame(oriented(b), width, height);
+  const Polygon ca = clip_to_frame(normalized(a), width, height);
+  const Polygon cb = clip_to_frame(normalized(b), width, height);
   Overlap o;
   o.area_a = std::max(0.0, signed_area(ca));
   o.area_b = std::max(0.0, signed_area(cb));

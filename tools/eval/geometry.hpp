@@ -13,6 +13,9 @@
 //    it is the integral of the product of both winding numbers.
 // Polygons are oriented counter-clockwise (positive shoelace area) before any clip, so a
 // detection's outline may come in either orientation.
+// An outline whose edges cross (not a simple polygon: a degenerate homography of the RANSAC
+// baselines can fold the model's outline over itself) has no meaningful area of its own; it is
+// replaced by its convex hull, i.e. such a detection claims everything its outline spans.
 #pragma once
 
 #include <vector>
@@ -38,6 +41,19 @@ bool is_convex(const Polygon& polygon);
 /// The polygon with positive signed area (reversed when it was negative).
 Polygon oriented(const Polygon& polygon);
 
+/// True when two edges that do not share a vertex cross properly (both strictly on both sides
+/// of each other); touching or collinear edges do not count.
+bool self_intersects(const Polygon& polygon);
+
+/// Convex hull (Andrew's monotone chain), counter-clockwise, without collinear points.
+Polygon convex_hull(const Polygon& polygon);
+
+/// The polygon as scored: its convex hull when it self-intersects, then oriented.
+Polygon normalized(const Polygon& polygon);
+
+/// Area of the normalized polygon clipped to [0, width] x [0, height].
+double frame_area(const Polygon& polygon, double width, double height);
+
 /// Sutherland-Hodgman: `subject` clipped by the convex polygon `clip` (any orientation).
 /// The result's area is the exact area of their intersection.
 Polygon clip_convex(const Polygon& subject, const Polygon& clip);
@@ -48,7 +64,7 @@ Polygon clip_to_frame(const Polygon& polygon, double width, double height);
 /// Area of the intersection of two polygons (see the notes at the top of this file).
 double intersection_area(const Polygon& a, const Polygon& b);
 
-/// Areas of two polygons clipped to a frame and of their intersection within it.
+/// Areas of two (normalized) polygons clipped to a frame and of their intersection within it.
 struct Overlap {
   double area_a = 0.0;
   double area_b = 0.0;

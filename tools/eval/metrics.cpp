@@ -222,7 +222,7 @@ void Scorer::add_scene(size_t scene_index, const std::vector<DetectedInstance>& 
     }
     if (g < 0) {
       ++t.fp;
-      t.counted_detected += area(clip_to_frame(oriented(det.polygon), w, h));
+      t.counted_detected += frame_area(det.polygon, w, h);
       continue;
     }
     const TrueInstance& truth = scene.instances[static_cast<size_t>(g)];
@@ -244,7 +244,7 @@ void Scorer::add_scene(size_t scene_index, const std::vector<DetectedInstance>& 
     if (truth.model != model || !required(truth))
       continue;
     ++t.required;
-    t.required_true += area(clip_to_frame(oriented(truth.polygon), w, h));
+    t.required_true += frame_area(truth.polygon, w, h);
     if (pick_known && *truth.covered < kPickCovered) {
       ++t.pick_required;
       const int d = paired_detection[g];

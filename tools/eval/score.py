@@ -13,7 +13,7 @@ prints, as JSON, the figures per method (lines without a "method" key form the m
 It is written apart from pickdetect-eval's C++ metric code, from FORMAT.md, so that the two can
 check each other. The choices FORMAT.md leaves open are made the same way (see metrics.hpp):
 exact polygon areas (Sutherland-Hodgman clipping against convex regions, fan triangulation for
-non-convex pairs, shoelace areas), greedy matching by descending IoU with ties to the earlier
+non-convex pairs, shoelace areas; a self-crossing outline scored as its convex hull), greedy matching by descending IoU with ties to the earlier
 detection then the earlier instance, don't-care instances matched like others but counted
 neither way, linear-interpolated percentiles, pick figures only over scenes where every instance
 has "covered", undefined ratios as null, ms_per_frame the median (overall: of the per-frame sum
@@ -74,6 +74,46 @@ def convex(poly):
     return len(signs) < 2
 
 
+def crosses(poly):
+    """Two edges without a common vertex cross properly."""
+    n = len(poly)
+
+    def opposite(a, b):
+        return (a > 0.0 and b < 0.0) or (a < 0.0 and b > 0.0)
+
+    for i in range(n):
+        a, b = poly[i], poly[(i + 1) % n]
+        for j in range(i + 2, n):
+            if i == 0 and j == n - 1:
+                continue
+            c, d = poly[j], poly[(j + 1) % n]
+            if opposite(turn(a, b, c), turn(a, b, d)) and opposite(turn(c, d, a), turn(c, d, b)):
+                return True
+    return False
+
+
+def hull(poly):
+    """Andrew's monotone chain, counter-clockwise, no collinear points."""
+    pts = sorted(poly)
+    if len(pts) < 3:
+        return pts
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and turn(lower[-2], lower[-1], p) <= 0.0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and turn(upper[-2], upper[-1], p) <= 0.0:
+            upper.pop()
+        upper.append(p)
+    return lower[:-1] + upper[:-1]
+
+
+def normal(poly):
+    """The outline as scored: a self-crossing one is replaced by its convex hull."""
+    return ccw(hull(poly) if crosses(poly) else poly)
+
+
 def clip(subject, clipper):
     """Sutherland-Hodgman: subject (any polygon) inside the convex clipper."""
     if len(subject) < 3 or len(clipper) < 3:
@@ -121,7 +161,7 @@ def inter_area(a, b):
 
 def overlap(d, g, w, h):
     """(|D|, |G|, |D n G|), all clipped to the frame."""
-    cd, cg = frame_clip(ccw(d), w, h), frame_clip(ccw(g), w, h)
+    cd, cg = frame_clip(normal(d), w, h), frame_clip(normal(g), w, h)
     ad, ag = max(0.0, shoelace(cd)), max(0.0, shoelace(cg))
     return ad, ag, min(inter_area(cd, cg), ad, ag)
 
@@ -268,7 +308,7 @@ def score_scene(tally, scene, dets, model):
                 tally["safe"] += 1
         if gi is None:
             tally["fp"] += 1
-            tally["det"] += max(0.0, shoelace(frame_clip(ccw(d["polygon"]), w, h)))
+            tally["det"] += max(0.0, shoelace(frame_clip(normal(d["polygon"]), w, h)))
             continue
         g = insts[gi]
         if g["visible"] < DONT_CARE_VISIBLE:
@@ -286,7 +326,7 @@ def score_scene(tally, scene, dets, model):
         if g["model"] != model or g["visible"] < DONT_CARE_VISIBLE:
             continue
         tally["required"] += 1
-        tally["true"] += max(0.0, shoelace(frame_clip(ccw(g["polygon"]), w, h)))
+        tally["true"] += max(0.0, shoelace(frame_clip(normal(g["polygon"]), w, h)))
         if pick_known and g["covered"] < PICK_COVERED:
             tally["pick_req"] += 1
             di = inst_pair.get(gi)
