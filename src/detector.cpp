@@ -9,6 +9,7 @@
 #include <pickdetect/voting.hpp>
 
 #include <opencv2/core.hpp>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -32,6 +33,15 @@ constexpr double kInlierAngleDeg = 30.0;
 /// ...and, with allow_scale, its size ratio lies within this factor of the pose's scale.
 constexpr double kInlierScaleFactor = 1.5;
 constexpr int kRefineRounds = 4;
+/// Perspective refinement (objects tilted a little out of the picture plane): a homography is
+/// fitted on an instance's inliers when there are this many...
+constexpr size_t kMinPerspectiveMatches = 16;
+/// ...and their model points span this share of the outline's area (no collinear few, the
+/// paper's objection to homographies)...
+constexpr double kMinPerspectiveSpread = 0.2;
+/// ...and it is kept only if no outline point moves farther than this share of the model's
+/// smaller side from where the similarity puts it.
+constexpr double kMaxPerspectiveShift = 0.15;
 /// Score: an instance with this many supporting matches scores 0.5.
 constexpr double kHalfScoreMatches = 10.0;
 /// Frames smaller than this on a side hold no instance worth a SIFT run.
@@ -172,6 +182,73 @@ std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_
   return in;
 }
 
+/// Homography fitted by least squares on the inliers of a similarity pose, kept when it is well
+/// supported and stays close to the similarity; `in` becomes its own inlier set.
+bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow_scale,
+                        const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h) {
+  if (in.size() < kMinPerspectiveMatches)
+    return false;
+  auto model_point = [&](int i) { return ms.model.keypoints[ms.matches[i].model_point].pt; };
+  auto scene_point = [&](int i) { return ms.scene_keypoints[ms.matches[i].scene_point].pt; };
+  {
+    std::vector<cv::Point2f> spread, hull;
+    for (int i : in)
+      spread.push_back(model_point(i));
+    cv::convexHull(spread, hull);
+    if (cv::contourArea(hull) < kMinPerspectiveSpread * std::abs(cv::contourArea(ms.model.outline)))
+      return false;
+  }
+  const double side = model_side(ms.model) * pose.scale;
+  const double tol = std::max(kMinInlierPx, kInlierShare * side);
+  const std::vector<cv::Point2f> similar = pose.apply(ms.model.outline);
+  std::vector<int> current = in;
+  bool found = false;
+  for (int round = 0; round < kRefineRounds; ++round) {
+    std::vector<cv::Point2f> from, to;
+    for (int i : current) {
+      from.push_back(model_point(i));
+      to.push_back(scene_point(i));
+    }
+    const cv::Mat fit = cv::findHomography(from, to, 0);
+    if (fit.empty() || !cv::checkRange(fit))
+      break;
+    const cv::Matx33d candidate(fit);
+    std::vector<cv::Point2f> outline;
+    cv::perspectiveTransform(ms.model.outline, outline, fit);
+    bool close = true;
+    for (size_t k = 0; k < outline.size() && close; ++k)
+      close = cv::norm(outline[k] - similar[k]) <= kMaxPerspectiveShift * side;
+    if (!close)
+      break;
+    std::vector<int> again;
+    std::vector<cv::Point2f> predicted;
+    for (size_t i = 0; i < ms.matches.size(); ++i) {
+      if (claimed[i])
+        continue;
+      const Vote& v = ms.votes[i];
+      if (angle_difference(v.angle, pose.angle) > kInlierAngleDeg)
+        continue;
+      if (allow_scale && (v.scale / pose.scale > kInlierScaleFactor ||
+                          v.scale / pose.scale < 1.0 / kInlierScaleFactor))
+        continue;
+      cv::perspectiveTransform(std::vector<cv::Point2f>{model_point(static_cast<int>(i))},
+                               predicted, fit);
+      if (cv::norm(predicted[0] - scene_point(static_cast<int>(i))) <= tol)
+        again.push_back(static_cast<int>(i));
+    }
+    if (again.size() < kMinPerspectiveMatches)
+      break;
+    h = candidate;
+    found = true;
+    if (again == current)
+      break;
+    current = std::move(again);
+  }
+  if (found)
+    in = std::move(current);
+  return found;
+}
+
 std::vector<Instance> detect_voting(ModelScene& ms, const Settings& s) {
   std::vector<Instance> found;
   std::vector<char> claimed(ms.matches.size(), 0);
@@ -181,18 +258,23 @@ std::vector<Instance> detect_voting(ModelScene& ms, const Settings& s) {
     Similarity pose;
     if (!pose_from_principal_points(ms, c.members, s.allow_scale, pose))
       continue;
-    int support = static_cast<int>(c.members.size());
+    Instance inst;
+    inst.matches = static_cast<int>(c.members.size());
+    place(inst, ms.model, pose);
     if (s.refine) {
-      const std::vector<int> in = refine_pose(ms, pose, s.allow_scale, claimed);
+      std::vector<int> in = refine_pose(ms, pose, s.allow_scale, claimed);
       if (static_cast<int>(in.size()) < s.min_matches)
         continue;
+      cv::Matx33d h;
+      // Without allow_scale the objects keep the model's size: the pose stays rigid.
+      if (s.allow_scale && refine_perspective(ms, pose, s.allow_scale, claimed, in, h))
+        place(inst, ms.model, h);
+      else
+        place(inst, ms.model, pose);
       for (int i : in)
         claimed[i] = 1;
-      support = static_cast<int>(in.size());
+      inst.matches = static_cast<int>(in.size());
     }
-    Instance inst;
-    place(inst, ms.model, pose);
-    inst.matches = support;
     found.push_back(std::move(inst));
   }
   return found;

@@ -149,3 +149,20 @@ TEST(Occlusion, OverlapTouchAndFrame) {
   EXPECT_EQ(inst[0].pick_order, 0);
   EXPECT_EQ(inst[2].pick_order, 1);
 }
+
+TEST(Features, KeypointsSitWhereTheBlobIs) {
+  // A dark Gaussian blob centred exactly on (80, 90), pixel centres on integers.
+  cv::Mat grey(180, 160, CV_8UC1);
+  for (int y = 0; y < grey.rows; ++y)
+    for (int x = 0; x < grey.cols; ++x)
+      grey.at<uchar>(y, x) = cv::saturate_cast<uchar>(
+          200.0 - 150.0 * std::exp(-((x - 80.0) * (x - 80.0) + (y - 90.0) * (y - 90.0)) / 50.0));
+  const Features f = extract_features(grey);
+  ASSERT_FALSE(f.keypoints.empty());
+  const cv::KeyPoint* best = &f.keypoints[0];
+  for (const cv::KeyPoint& k : f.keypoints)
+    if (k.response > best->response)
+      best = &k;
+  EXPECT_NEAR(best->pt.x, 80.f, 0.1f);
+  EXPECT_NEAR(best->pt.y, 90.f, 0.1f);
+}

@@ -32,6 +32,32 @@ void draw(cv::Mat& bgr, const std::vector<pickdetect::Instance>& instances) {
   }
 }
 
+void print_points(const std::vector<cv::Point2f>& points) {
+  std::printf("[");
+  for (size_t j = 0; j < points.size(); ++j)
+    std::printf("%s[%.3f, %.3f]", j ? ", " : "", points[j].x, points[j].y);
+  std::printf("]");
+}
+
+/// One line of the benchmark's detections format (JSON Lines).
+void print_json(const char* picture, const std::vector<pickdetect::Instance>& instances) {
+  gchar* name = g_strescape(picture, nullptr);
+  std::printf("{\"image\": \"%s\", \"instances\": [", name);
+  g_free(name);
+  for (size_t i = 0; i < instances.size(); ++i) {
+    const pickdetect::Instance& inst = instances[i];
+    gchar* model = g_strescape(inst.model_name.c_str(), nullptr);
+    std::printf("%s{\"model\": \"%s\", \"points\": ", i ? ", " : "", model);
+    g_free(model);
+    print_points(inst.points);
+    std::printf(", \"polygon\": ");
+    print_points(inst.outline);
+    std::printf(", \"score\": %.4f, \"matches\": %d, \"pickable\": %s}", inst.score, inst.matches,
+                inst.pickable ? "true" : "false");
+  }
+  std::printf("]}\n");
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
@@ -43,7 +69,7 @@ int main(int argc, char** argv) {
   gdouble bandwidth = pickdetect::Settings().bandwidth;
   gint min_matches = pickdetect::Settings().min_matches;
   gint max_instances = pickdetect::Settings().max_instances;
-  gboolean no_scale = FALSE, no_refine = FALSE;
+  gboolean no_scale = FALSE, no_refine = FALSE, json = FALSE;
   const GOptionEntry entries[] = {
       {"model", 'm', 0, G_OPTION_ARG_FILENAME_ARRAY, &models,
        "Model file (.yml) or model picture; repeat for several models", "FILE"},
@@ -60,6 +86,9 @@ int main(int argc, char** argv) {
        "Assume the objects are at the model's scale (the paper's assumption)", nullptr},
       {"no-refine", 0, 0, G_OPTION_ARG_NONE, &no_refine,
        "Keep the paper's pose from the principal points' modes (no refit on inliers)", nullptr},
+      {"json", 0, 0, G_OPTION_ARG_NONE, &json,
+       "Print one JSON line per picture (the benchmark's detections format) instead of text",
+       nullptr},
       {"annotate", 'o', 0, G_OPTION_ARG_FILENAME, &annotate,
        "Write the (last) picture with the instances drawn on it", "FILE"},
       {"save-model", 0, 0, G_OPTION_ARG_FILENAME, &save,
@@ -114,6 +143,10 @@ int main(int argc, char** argv) {
       cv::Mat grey;
       cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
       const pickdetect::Detection d = detector.detect(grey, s);
+      if (json) {
+        print_json(argv[a], d.instances);
+        continue;
+      }
       std::printf("%s: %zu instance(s), %d keypoints, %d matches, %.0f ms (%s)\n", argv[a],
                   d.instances.size(), d.scene_keypoints, d.matches,
                   d.timings.features_ms + d.timings.matching_ms + d.timings.clustering_ms,
