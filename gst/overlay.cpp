@@ -34,6 +34,7 @@ int clamp8(double v) {
 
 bool Overlay::configure(const GstVideoInfo& info) {
   layers_.clear();
+  halo_ = false;
   const GstVideoFormatInfo* finfo = info.finfo;
   if (!finfo || GST_VIDEO_FORMAT_INFO_BITS(finfo) != 8 || GST_VIDEO_FORMAT_INFO_IS_TILED(finfo))
     return false;
@@ -59,7 +60,8 @@ bool Overlay::configure(const GstVideoInfo& info) {
   }
 
   if (GST_VIDEO_FORMAT_INFO_IS_GRAY(finfo)) {
-    full_range_ = true; // Grey frames are drawn in plain grey levels.
+    full_range_ = true; // Grey frames are drawn in plain grey levels...
+    halo_ = true;       // ...over a black halo.
     Layer layer;
     layer.kind = Kind::Luma;
     layer.channels = GST_VIDEO_FORMAT_INFO_PSTRIDE(finfo, 0);
@@ -168,32 +170,40 @@ void Overlay::draw(GstVideoFrame& frame, const std::vector<pickdetect::Instance>
     auto radius = [&](int r) { return static_cast<int>(std::lround(r * s * kOne)); };
     auto thickness = [&](int t) { return std::max(1, static_cast<int>(std::lround(t * s))); };
 
-    const cv::Scalar white = colour(layer, kWhite);
-    const cv::Scalar green = colour(layer, kGreen);
+    // Grey frames get a black halo under every stroke, or mid-grey marks would vanish.
+    const int passes = halo_ ? 2 : 1;
+    for (int pass = 0; pass < passes; pass++) {
+      const bool halo = halo_ && pass == 0;
+      const int extra = halo ? 2 : 0;
+      auto paint = [&](Rgb rgb) { return halo ? cv::Scalar::all(0) : colour(layer, rgb); };
+      const cv::Scalar white = paint(kWhite);
+      const cv::Scalar green = paint(kGreen);
 
-    for (const pickdetect::Instance& instance : instances) {
-      std::vector<cv::Point> outline;
-      outline.reserve(instance.outline.size());
-      for (const cv::Point2f& p : instance.outline)
-        outline.push_back(at(p));
-      if (outline.size() >= 2)
-        cv::polylines(plane, outline, true, white, thickness(kOutlineThickness), cv::LINE_AA,
-                      kShift);
+      for (const pickdetect::Instance& instance : instances) {
+        std::vector<cv::Point> outline;
+        outline.reserve(instance.outline.size());
+        for (const cv::Point2f& p : instance.outline)
+          outline.push_back(at(p));
+        if (outline.size() >= 2)
+          cv::polylines(plane, outline, true, white, thickness(kOutlineThickness) + extra,
+                        cv::LINE_AA, kShift);
 
-      for (size_t i = 1; i < instance.points.size(); i++) {
-        const Rgb& c = kPointColours[(i - 1) % (sizeof(kPointColours) / sizeof(kPointColours[0]))];
-        cv::circle(plane, at(instance.points[i]), radius(kPointRadius), colour(layer, c),
-                   thickness(kPointThickness), cv::LINE_AA, kShift);
+        for (size_t i = 1; i < instance.points.size(); i++) {
+          const Rgb& c =
+              kPointColours[(i - 1) % (sizeof(kPointColours) / sizeof(kPointColours[0]))];
+          cv::circle(plane, at(instance.points[i]), radius(kPointRadius), paint(c),
+                     thickness(kPointThickness) + extra, cv::LINE_AA, kShift);
+        }
+
+        const cv::Point2f centre = instance.points.empty() ? instance.center : instance.points[0];
+        cv::circle(plane, at(centre), radius(kCentreRadius), green,
+                   thickness(kCentreThickness) + extra, cv::LINE_AA, kShift);
+        const cv::Point text_at(
+            static_cast<int>(std::lround((centre.x + kCentreRadius + 4) * layer.sx)),
+            static_cast<int>(std::lround((centre.y - kCentreRadius - 4) * layer.sy)));
+        cv::putText(plane, std::to_string(instance.matches), text_at, cv::FONT_HERSHEY_SIMPLEX,
+                    kFontScale * s, green, thickness(kFontThickness) + extra, cv::LINE_AA);
       }
-
-      const cv::Point2f centre = instance.points.empty() ? instance.center : instance.points[0];
-      cv::circle(plane, at(centre), radius(kCentreRadius), green, thickness(kCentreThickness),
-                 cv::LINE_AA, kShift);
-      const cv::Point text_at(
-          static_cast<int>(std::lround((centre.x + kCentreRadius + 4) * layer.sx)),
-          static_cast<int>(std::lround((centre.y - kCentreRadius - 4) * layer.sy)));
-      cv::putText(plane, std::to_string(instance.matches), text_at, cv::FONT_HERSHEY_SIMPLEX,
-                  kFontScale * s, green, thickness(kFontThickness), cv::LINE_AA);
     }
   }
 }

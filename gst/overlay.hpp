@@ -20,8 +20,8 @@ struct Rgb {
 /// Draws instances straight into mapped video frames: outlines in white, a large green circle on
 /// the centre with the number of matches beside it, small blue / magenta / yellow / green circles
 /// on the other principal points. Packed RGB is drawn with the channel order of the format, grey
-/// in grey levels, YUV on the luma plane and on the subsampled chroma planes with the colours
-/// converted with the stream's colour matrix (BT.601 when the caps do not say).
+/// in grey levels over a black halo, YUV on the luma plane and on the subsampled chroma planes with
+/// the colours converted with the stream's colour matrix (BT.601 when the caps do not say).
 class Overlay {
 public:
   /// Chooses, once per caps, which planes to draw on and how colours map onto them. Returns false
@@ -49,6 +49,7 @@ private:
   double kr_ = 0.299;
   double kb_ = 0.114;
   bool full_range_ = false;
+  bool halo_ = false; ///< Grey frames: strokes go over a black halo.
 };
 
 } // namespace gstpickdetect
