@@ -138,7 +138,7 @@ int run(int argc, char** argv) {
       {G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &o.rest, nullptr, "DATASET_DIR"},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
 
-  GOptionContext* context = g_option_context_new("DATASET_DIR");
+  GOptionContext* context = g_option_context_new(nullptr);
   g_option_context_set_summary(
       context, "Runs every scene of an annotated dataset (see the benchmark's FORMAT.md) through "
                "the pickdetect element\nonce per method and model, and prints object, pixel, "

@@ -204,7 +204,17 @@ ElementRunner::ElementRunner(const std::vector<std::pair<std::string, std::strin
       problem = "the pickdetect element has no property '" + name + "'";
       break;
     }
-    gst_util_set_object_arg(G_OBJECT(detect), name.c_str(), value.c_str());
+    GValue v = G_VALUE_INIT;
+    g_value_init(&v, spec->value_type);
+    const bool parsed = gst_value_deserialize(&v, value.c_str());
+    if (!parsed || g_param_value_validate(spec, &v)) {
+      g_value_unset(&v);
+      problem = "the pickdetect element's property '" + name + "' cannot take '" + value + "'" +
+                (parsed ? " (out of range)" : "");
+      break;
+    }
+    g_object_set_property(G_OBJECT(detect), name.c_str(), &v);
+    g_value_unset(&v);
   }
   gst_object_unref(detect);
   if (problem.empty() &&

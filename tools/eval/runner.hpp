@@ -42,8 +42,8 @@ struct FrameResult {
   double ms = 0.0; ///< Wall time from pushing the frame to getting it back.
 };
 
-/// appsrc ! pickdetect ! appsink. Properties are (name, value-as-text) pairs, set with
-/// gst_util_set_object_arg after checking that the element has the property.
+/// appsrc ! pickdetect ! appsink. Properties are (name, value-as-text) pairs, parsed as
+/// gst-launch would; an unknown property or a value that does not parse or fit is refused.
 class ElementRunner {
 public:
   explicit ElementRunner(const std::vector<std::pair<std::string, std::string>>& properties);

@@ -558,7 +558,7 @@ int run(int argc, char** argv) {
       {"fps", 0, 0, G_OPTION_ARG_DOUBLE, &fps, "Frames per second of the clip (10)", "FPS"},
       {G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &pictures, nullptr, "PICTURE..."},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
-  GOptionContext* context = g_option_context_new("PICTURE...");
+  GOptionContext* context = g_option_context_new(nullptr);
   g_option_context_set_summary(context,
                                "Makes annotated bin and conveyor scenes (or a conveyor clip) from "
                                "model pictures; a PNG's alpha marks the object.");
