@@ -63,6 +63,9 @@ double score_for(int matches) {
 
 /// Fills an instance's geometry from a similarity pose.
 void place(Instance& inst, const Model& model, const Similarity& pose) {
+  const double rad = pose.angle * CV_PI / 180.0;
+  const double c = std::cos(rad) * pose.scale, sn = std::sin(rad) * pose.scale;
+  inst.homography = cv::Matx33d(c, -sn, pose.translation.x, sn, c, pose.translation.y, 0, 0, 1);
   inst.points = pose.apply(model.principal_points);
   inst.outline = pose.apply(model.outline);
   inst.center = inst.points[0];
@@ -72,6 +75,7 @@ void place(Instance& inst, const Model& model, const Similarity& pose) {
 
 /// Fills an instance's geometry from a homography (the RANSAC baselines).
 void place(Instance& inst, const Model& model, const cv::Matx33d& h) {
+  inst.homography = h;
   cv::perspectiveTransform(model.principal_points, inst.points, cv::Mat(h));
   cv::perspectiveTransform(model.outline, inst.outline, cv::Mat(h));
   inst.center = inst.points[0];
@@ -249,6 +253,14 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
   return found;
 }
 
+std::vector<cv::Point2f> scene_points(const ModelScene& ms, const std::vector<int>& idx) {
+  std::vector<cv::Point2f> out;
+  out.reserve(idx.size());
+  for (int i : idx)
+    out.push_back(ms.scene_keypoints[ms.matches[i].scene_point].pt);
+  return out;
+}
+
 std::vector<Instance> detect_voting(ModelScene& ms, const Settings& s) {
   std::vector<Instance> found;
   std::vector<char> claimed(ms.matches.size(), 0);
@@ -274,6 +286,9 @@ std::vector<Instance> detect_voting(ModelScene& ms, const Settings& s) {
       for (int i : in)
         claimed[i] = 1;
       inst.matches = static_cast<int>(in.size());
+      inst.support = scene_points(ms, in);
+    } else {
+      inst.support = scene_points(ms, c.members);
     }
     found.push_back(std::move(inst));
   }
@@ -306,6 +321,8 @@ std::vector<Instance> detect_ransac(ModelScene& ms, const Settings& s, bool clus
     Instance inst;
     place(inst, ms.model, fit.homography);
     inst.matches = static_cast<int>(fit.inliers.size());
+    for (int k : fit.inliers)
+      inst.support.push_back(ms.scene_keypoints[ms.matches[g[k]].scene_point].pt);
     found.push_back(std::move(inst));
   }
   return found;
@@ -359,13 +376,18 @@ Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const 
   const auto t0 = Clock::now();
   const Features scene = extract_features(grey);
   const double features_ms = ms_since(t0);
-  result = detect(scene, grey.size(), settings);
+  result = detect_scene(scene, grey.size(), settings, grey);
   result.timings.features_ms = features_ms;
   return result;
 }
 
 Detection Detector::detect(const Features& scene, const cv::Size& frame_size,
-                           const Settings& s) const {
+                           const Settings& settings) const {
+  return detect_scene(scene, frame_size, settings, cv::Mat());
+}
+
+Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_size,
+                                 const Settings& s, const cv::Mat& grey) const {
   Detection result;
   result.scene_keypoints = static_cast<int>(scene.keypoints.size());
   auto t = Clock::now();
@@ -419,7 +441,7 @@ Detection Detector::detect(const Features& scene, const cv::Size& frame_size,
                    });
   if (s.max_instances > 0 && static_cast<int>(result.instances.size()) > s.max_instances)
     result.instances.resize(s.max_instances);
-  assess_occlusion(result.instances, frame_size);
+  assess_occlusion(result.instances, models_, frame_size, grey);
   result.timings.clustering_ms = ms_since(t);
   return result;
 }

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
-// Occlusion: which instances overlap others, how much of each is in view, and the pick order.
+// Occlusion: which of two overlapping instances lies on top, how much of each is seen, which
+// can be picked and in what order.
 #include <pickdetect/occlusion.hpp>
 
 #include <opencv2/imgproc.hpp>
@@ -9,6 +10,18 @@
 
 namespace pickdetect {
 namespace {
+
+/// Feature evidence: the upper instance needs at least this many supporting keypoints in the
+/// shared area...
+constexpr int kMinTopFeatures = 3;
+/// ...and a share of the model's keypoints there at least this many times the lower one's.
+constexpr double kTopFeatureDominance = 3.0;
+/// Pixel evidence: the upper instance's picture must correlate at least this well with the
+/// frame in the shared area, and this much better than the lower one's.
+constexpr double kMinTopCorrelation = 0.4;
+constexpr double kTopCorrelationMargin = 0.15;
+/// Fewest shared-area pixels worth correlating.
+constexpr int kMinCorrelationPixels = 50;
 
 std::vector<cv::Point2f> hull_of(const std::vector<cv::Point2f>& outline) {
   std::vector<cv::Point2f> hull;
@@ -21,6 +34,60 @@ double area_of(const std::vector<cv::Point2f>& polygon) {
   return polygon.size() >= 3 ? std::abs(cv::contourArea(polygon)) : 0.0;
 }
 
+std::vector<cv::Point2f> shared_area(const Instance& a, const Instance& b) {
+  const std::vector<cv::Point2f> ha = hull_of(a.outline), hb = hull_of(b.outline);
+  std::vector<cv::Point2f> both;
+  if (ha.size() >= 3 && hb.size() >= 3)
+    cv::intersectConvexConvex(ha, hb, both, true);
+  return both;
+}
+
+int count_inside(const std::vector<cv::Point2f>& points, const std::vector<cv::Point2f>& polygon) {
+  int n = 0;
+  for (const cv::Point2f& p : points)
+    n += cv::pointPolygonTest(polygon, p, false) >= 0;
+  return n;
+}
+
+/// Share of the model's keypoints lying in `region` (scene pixels) that the instance kept.
+double kept_share(const Instance& inst, const Model& model, const std::vector<cv::Point2f>& region,
+                  int& kept) {
+  kept = count_inside(inst.support, region);
+  std::vector<cv::Point2f> in_model;
+  cv::perspectiveTransform(region, in_model, cv::Mat(inst.homography.inv()));
+  std::vector<cv::Point2f> model_points;
+  model_points.reserve(model.keypoints.size());
+  for (const cv::KeyPoint& k : model.keypoints)
+    model_points.push_back(k.pt);
+  const int expected = count_inside(model_points, in_model);
+  return expected > 0 ? static_cast<double>(kept) / expected : 0.0;
+}
+
+/// Normalised cross-correlation, over the shared area, of the frame with the model's picture
+/// carried there by the instance's pose. Returns -1 when it cannot be computed.
+double correlation(const Instance& inst, const Model& model, const cv::Mat& grey,
+                   const cv::Rect& box, const cv::Mat& region_mask) {
+  const cv::Matx33d shift(1, 0, -box.x, 0, 1, -box.y, 0, 0, 1);
+  cv::Mat warped, warped_mask;
+  cv::warpPerspective(model.image, warped, cv::Mat(shift * inst.homography), box.size(),
+                      cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  cv::warpPerspective(model.mask, warped_mask, cv::Mat(shift * inst.homography), box.size(),
+                      cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+  cv::Mat mask = region_mask & warped_mask;
+  if (cv::countNonZero(mask) < kMinCorrelationPixels)
+    return -1.0;
+  cv::Mat frame, model_pixels;
+  grey(box).convertTo(frame, CV_32F);
+  warped.convertTo(model_pixels, CV_32F);
+  cv::Scalar mf, sf, mm, sm;
+  cv::meanStdDev(frame, mf, sf, mask);
+  cv::meanStdDev(model_pixels, mm, sm, mask);
+  if (sf[0] < 1e-3 || sm[0] < 1e-3)
+    return -1.0;
+  cv::Mat product = (frame - mf[0]).mul(model_pixels - mm[0]);
+  return cv::mean(product, mask)[0] / (sf[0] * sm[0]);
+}
+
 } // namespace
 
 double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
@@ -31,29 +98,91 @@ double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Poi
   return std::max(0.0, static_cast<double>(cv::intersectConvexConvex(ha, hb, both, true)));
 }
 
-void assess_occlusion(std::vector<Instance>& instances, const cv::Size& frame_size) {
-  const std::vector<cv::Point2f> frame = {
-      {0.f, 0.f},
-      {static_cast<float>(frame_size.width), 0.f},
-      {static_cast<float>(frame_size.width), static_cast<float>(frame_size.height)},
-      {0.f, static_cast<float>(frame_size.height)}};
+int which_on_top(const Instance& a, const Model& model_a, const Instance& b, const Model& model_b,
+                 const cv::Mat& grey) {
+  const std::vector<cv::Point2f> region = shared_area(a, b);
+  if (region.size() < 3)
+    return 0;
+  int kept_a = 0, kept_b = 0;
+  const double share_a = kept_share(a, model_a, region, kept_a);
+  const double share_b = kept_share(b, model_b, region, kept_b);
+  if (kept_a >= kMinTopFeatures && share_a >= kTopFeatureDominance * share_b)
+    return +1;
+  if (kept_b >= kMinTopFeatures && share_b >= kTopFeatureDominance * share_a)
+    return -1;
+  if (grey.empty())
+    return 0;
+
+  cv::Rect box = cv::boundingRect(region) & cv::Rect(0, 0, grey.cols, grey.rows);
+  if (box.area() < kMinCorrelationPixels)
+    return 0;
+  cv::Mat region_mask = cv::Mat::zeros(box.size(), CV_8UC1);
+  std::vector<cv::Point> polygon;
+  for (const cv::Point2f& p : region)
+    polygon.emplace_back(cvRound(p.x - box.x), cvRound(p.y - box.y));
+  cv::fillConvexPoly(region_mask, polygon, cv::Scalar(255));
+  const double ca = correlation(a, model_a, grey, box, region_mask);
+  const double cb = correlation(b, model_b, grey, box, region_mask);
+  if (ca >= kMinTopCorrelation && ca >= cb + kTopCorrelationMargin)
+    return +1;
+  if (cb >= kMinTopCorrelation && cb >= ca + kTopCorrelationMargin)
+    return -1;
+  return 0;
+}
+
+void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
+                      const cv::Size& frame_size, const cv::Mat& grey) {
   const size_t n = instances.size();
+  // above[i]: the instances lying on instance i; hidden[i]: the area they hide, in pixels.
+  std::vector<std::vector<size_t>> above(n);
+  std::vector<double> hidden(n, 0.0);
   std::vector<double> area(n);
   for (size_t i = 0; i < n; ++i) {
     area[i] = area_of(instances[i].outline);
-    instances[i].visibility =
-        area[i] > 0.0 ? std::min(1.0, overlap_area(instances[i].outline, frame) / area[i]) : 0.0;
-    instances[i].pickable = area[i] > 0.0;
-    instances[i].pick_order = 0;
+    instances[i].covered = false;
   }
   for (size_t i = 0; i < n; ++i)
     for (size_t j = i + 1; j < n; ++j) {
       const double shared = overlap_area(instances[i].outline, instances[j].outline);
-      if (shared > kOverlapTolerance * area[i])
-        instances[i].pickable = false;
-      if (shared > kOverlapTolerance * area[j])
-        instances[j].pickable = false;
+      if (shared <= kOverlapTolerance * std::min(area[i], area[j]))
+        continue;
+      const int top = which_on_top(instances[i], models[instances[i].model], instances[j],
+                                   models[instances[j].model], grey);
+      if (top >= 0) { // j is under i, or nobody can tell: then neither is safe to pick
+        above[j].push_back(i);
+        hidden[j] += shared;
+      }
+      if (top <= 0) {
+        above[i].push_back(j);
+        hidden[i] += shared;
+      }
     }
+
+  const cv::Rect frame(0, 0, frame_size.width, frame_size.height);
+  for (size_t i = 0; i < n; ++i) {
+    Instance& inst = instances[i];
+    inst.covered = area[i] <= 0.0 || hidden[i] > kCoverTolerance * area[i];
+    inst.visibility = 0.0;
+    const cv::Rect box = cv::boundingRect(inst.outline) & frame;
+    if (area[i] > 0.0 && box.area() > 0) {
+      cv::Mat seen = cv::Mat::zeros(box.size(), CV_8UC1);
+      auto fill = [&](const std::vector<cv::Point2f>& outline, uchar value) {
+        std::vector<cv::Point> polygon;
+        for (const cv::Point2f& p : outline)
+          polygon.emplace_back(cvRound(p.x - box.x), cvRound(p.y - box.y));
+        cv::fillPoly(seen, std::vector<std::vector<cv::Point>>{polygon}, cv::Scalar(value));
+      };
+      fill(inst.outline, 255);
+      for (size_t j : above[i])
+        fill(instances[j].outline, 0);
+      inst.visibility = std::min(1.0, cv::countNonZero(seen) / area[i]);
+    }
+    const bool grasp_in_frame = inst.grasp.x >= 0.f && inst.grasp.y >= 0.f &&
+                                inst.grasp.x < frame_size.width && inst.grasp.y < frame_size.height;
+    inst.pickable = !inst.covered && grasp_in_frame && inst.visibility >= kMinPickableVisibility;
+    inst.pick_order = 0;
+  }
+
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(),

@@ -42,14 +42,18 @@ struct Instance {
   std::vector<cv::Point2f> points;  ///< The model's principal points; [0] is the centre.
   std::vector<cv::Point2f> outline; ///< The model's outline carried into the scene.
   cv::Point2f center;
-  double angle = 0.0;       ///< Degrees in [0, 360), clockwise on screen (image y axis down).
-  double scale = 1.0;       ///< Scene size / model size.
-  int matches = 0;          ///< Matches that support the instance.
-  double score = 0.0;       ///< Confidence in [0, 1].
-  double visibility = 1.0;  ///< Estimated fraction of the outline that is seen.
-  bool pickable = false;    ///< Nothing detected lies on it (see occlusion.hpp).
-  int pick_order = 0;       ///< 1 = pick first among the pickable instances; 0 = not pickable.
-  cv::Point2f grasp;        ///< The model's grasp point in the scene.
+  double angle = 0.0; ///< Degrees in [0, 360), clockwise on screen (image y axis down).
+  double scale = 1.0; ///< Scene size / model size.
+  int matches = 0;    ///< Matches that support the instance.
+  double score = 0.0; ///< Confidence in [0, 1].
+  cv::Matx33d homography = cv::Matx33d::eye(); ///< Carries model pixels into the scene.
+  std::vector<cv::Point2f> support;            ///< Scene positions of the supporting keypoints.
+  /// Estimated share of the outline that is seen: inside the frame and under no other instance.
+  double visibility = 1.0;
+  bool covered = false;  ///< Another detected instance lies on it (or which is on top is unclear).
+  bool pickable = false; ///< Not covered and enough of it seen (see occlusion.hpp).
+  int pick_order = 0;    ///< 1 = pick first among the pickable instances; 0 = not pickable.
+  cv::Point2f grasp;     ///< The model's grasp point in the scene.
   double grasp_angle = 0.0; ///< Gripper angle in degrees (the instance's angle).
 };
 
@@ -76,13 +80,17 @@ public:
   /// Detects in a grey frame (CV_8UC1, any stride; the data is only read).
   Detection detect(const cv::Mat& grey, const Settings& settings = Settings()) const;
 
-  /// Detects from features already extracted from the frame.
+  /// Detects from features already extracted from the frame. Without the frame's pixels,
+  /// which of two overlapping instances is on top is told from the features alone.
   Detection detect(const Features& scene, const cv::Size& frame_size,
                    const Settings& settings = Settings()) const;
 
   const std::vector<Model>& models() const { return models_; }
 
 private:
+  Detection detect_scene(const Features& scene, const cv::Size& frame_size,
+                         const Settings& settings, const cv::Mat& grey) const;
+
   std::vector<Model> models_;
   Matcher matcher_;
 };

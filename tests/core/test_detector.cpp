@@ -100,8 +100,11 @@ TEST(Detector, OverlappingInstancesComeOutSeparately) {
   ASSERT_EQ(d.instances.size(), 2u) << "found:" << describe(d.instances);
   for (const Pose& p : poses)
     expect_found(d.instances, p, 1.5);
-  for (const Instance& i : d.instances)
-    EXPECT_FALSE(i.pickable) << "overlapping instances must not be pickable";
+  // The second box, pasted last, lies on top: it alone may be picked.
+  for (const Instance& i : d.instances) {
+    const bool upper = std::hypot(i.center.x - 460.f, i.center.y - 330.f) < 3.0;
+    EXPECT_EQ(i.pickable, upper) << "at (" << i.center.x << ", " << i.center.y << ")";
+  }
 }
 
 TEST(Detector, SeparateInstancesArePickableInScoreOrder) {

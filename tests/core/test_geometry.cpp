@@ -121,33 +121,12 @@ TEST(Matcher, AFeatureThatFitsTwoModelsEquallyDecidesForNeither) {
   EXPECT_TRUE(Matcher({a, twin}).match(scene.descriptors, 0.8).empty());
 }
 
-TEST(Occlusion, OverlapTouchAndFrame) {
+TEST(Occlusion, OverlapAreaOfCrossingAndTouchingOutlines) {
   const std::vector<cv::Point2f> a = {{0, 0}, {100, 0}, {100, 100}, {0, 100}};
   const std::vector<cv::Point2f> b = {{50, 50}, {150, 50}, {150, 150}, {50, 150}};
   const std::vector<cv::Point2f> touching = {{100, 0}, {200, 0}, {200, 100}, {100, 100}};
   EXPECT_NEAR(overlap_area(a, b), 2500.0, 1e-3);
   EXPECT_NEAR(overlap_area(a, touching), 0.0, 1e-3);
-
-  std::vector<Instance> inst(3);
-  inst[0].outline = a;
-  inst[0].score = 0.9;
-  inst[1].outline = touching;
-  inst[1].score = 0.95;
-  inst[2].outline = {{300, 300}, {500, 300}, {500, 500}, {300, 500}};
-  inst[2].score = 0.5;
-  assess_occlusion(inst, {400, 400});
-  EXPECT_TRUE(inst[0].pickable);
-  EXPECT_TRUE(inst[1].pickable);
-  EXPECT_EQ(inst[1].pick_order, 1);
-  EXPECT_EQ(inst[0].pick_order, 2);
-  EXPECT_NEAR(inst[2].visibility, 0.25, 1e-6);
-
-  inst[1].outline = b;
-  assess_occlusion(inst, {400, 400});
-  EXPECT_FALSE(inst[0].pickable);
-  EXPECT_FALSE(inst[1].pickable);
-  EXPECT_EQ(inst[0].pick_order, 0);
-  EXPECT_EQ(inst[2].pick_order, 1);
 }
 
 TEST(Features, KeypointsSitWhereTheBlobIs) {

@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Which one to pick: stacks in both orders, three levels, touching neighbours, the frame edge.
+#include "../common/scene.hpp"
+
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+
+using namespace pickdetect;
+using pickdetect::test_scene::Pose;
+
+namespace {
+
+const std::string kData = PICKDETECT_TEST_DATA;
+
+const Model& box_model() {
+  static const Model model = load_model(kData + "/box.png");
+  return model;
+}
+
+const Detector& box_detector() {
+  static const Detector detector({box_model()});
+  return detector;
+}
+
+/// Detects in a scene with boxes pasted in the given order (the last lies on top) and returns
+/// the instance found nearest each pose, in the same order.
+std::vector<Instance> detect_stack(const std::vector<Pose>& poses, cv::Size frame = {900, 700},
+                                   bool with_pixels = true) {
+  const cv::Mat picture = cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
+  cv::Mat scene = test_scene::plain_background(frame);
+  test_scene::paste(scene, picture, poses);
+  const Detection d = with_pixels ? box_detector().detect(scene)
+                                  : box_detector().detect(extract_features(scene), scene.size());
+  std::vector<Instance> ordered;
+  for (const Pose& p : poses) {
+    const Instance* best = nullptr;
+    for (const Instance& i : d.instances)
+      if (std::hypot(i.center.x - p.center.x, i.center.y - p.center.y) < 3.0)
+        best = &i;
+    EXPECT_NE(best, nullptr) << "no instance found at (" << p.center.x << ", " << p.center.y << ")";
+    ordered.push_back(best ? *best : Instance());
+  }
+  EXPECT_EQ(d.instances.size(), poses.size());
+  return ordered;
+}
+
+} // namespace
+
+TEST(Occlusion, TwoBoxStackOnlyTheUpperOneIsPickable) {
+  const Pose lower{{330.f, 300.f}, 15.0, 1.0}, upper{{470.f, 380.f}, 100.0, 1.0};
+  for (bool with_pixels : {true, false}) {
+    const std::vector<Instance> found = detect_stack({lower, upper}, {900, 700}, with_pixels);
+    ASSERT_EQ(found.size(), 2u);
+    EXPECT_TRUE(found[0].covered) << "the lower box must be covered (pixels: " << with_pixels
+                                  << ")";
+    EXPECT_FALSE(found[0].pickable);
+    EXPECT_EQ(found[0].pick_order, 0);
+    EXPECT_FALSE(found[1].covered) << "the upper box lies free (pixels: " << with_pixels << ")";
+    EXPECT_TRUE(found[1].pickable);
+    EXPECT_EQ(found[1].pick_order, 1);
+    EXPECT_LT(found[0].visibility, 0.9);
+    EXPECT_GT(found[1].visibility, 0.99);
+  }
+}
+
+TEST(Occlusion, TwoBoxStackTheOtherWayRound) {
+  const Pose lower{{470.f, 380.f}, 100.0, 1.0}, upper{{330.f, 300.f}, 15.0, 1.0};
+  const std::vector<Instance> found = detect_stack({lower, upper});
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_FALSE(found[0].pickable) << "the lower box must not be pickable";
+  EXPECT_TRUE(found[1].pickable) << "the upper box must be pickable";
+  EXPECT_EQ(found[1].pick_order, 1);
+}
+
+TEST(Occlusion, ThreeLevelStackOnlyTheTopIsPickable) {
+  const std::vector<Pose> stack = {
+      {{300.f, 300.f}, 0.0, 1.0}, {{430.f, 360.f}, 60.0, 1.0}, {{560.f, 420.f}, 140.0, 1.0}};
+  const std::vector<Instance> found = detect_stack(stack, {1000, 750});
+  ASSERT_EQ(found.size(), 3u);
+  EXPECT_TRUE(found[0].covered);
+  EXPECT_TRUE(found[1].covered);
+  EXPECT_FALSE(found[2].covered);
+  EXPECT_FALSE(found[0].pickable);
+  EXPECT_FALSE(found[1].pickable);
+  EXPECT_TRUE(found[2].pickable);
+}
+
+TEST(Occlusion, SideBySideBoxesThatTouchAreBothPickable) {
+  // Two upright boxes whose long edges meet: 224 px apart, the box's height (223 px) plus one.
+  const std::vector<Pose> row = {
+      {{300.f, 250.f}, 0.0, 1.0}, {{300.f, 474.f}, 0.0, 1.0}, {{625.f, 250.f}, 0.0, 1.0}};
+  const std::vector<Instance> found = detect_stack(row, {900, 700});
+  ASSERT_EQ(found.size(), 3u);
+  for (const Instance& i : found) {
+    EXPECT_FALSE(i.covered) << "at (" << i.center.x << ", " << i.center.y << ")";
+    EXPECT_TRUE(i.pickable) << "at (" << i.center.x << ", " << i.center.y << ")";
+  }
+  std::vector<int> orders = {found[0].pick_order, found[1].pick_order, found[2].pick_order};
+  std::sort(orders.begin(), orders.end());
+  EXPECT_EQ(orders, (std::vector<int>{1, 2, 3}));
+}
+
+TEST(Occlusion, VisibilityCountsWhatLiesOutsideTheFrame) {
+  // A box whose left half lies beyond the frame's edge.
+  const std::vector<Instance> found = detect_stack({{{0.f, 300.f}, 0.0, 1.0}}, {700, 600});
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_NEAR(found[0].visibility, 0.5, 0.02);
+  EXPECT_FALSE(found[0].covered);
+  EXPECT_FALSE(found[0].pickable) << "its grasp point (the centre) lies on the frame's edge";
+}
+
+TEST(Occlusion, PickOrderFollowsTheScore) {
+  std::vector<Instance> inst(3);
+  const std::vector<std::vector<cv::Point2f>> outlines = {
+      {{0, 0}, {100, 0}, {100, 100}, {0, 100}},
+      {{150, 0}, {250, 0}, {250, 100}, {150, 100}},
+      {{300, 0}, {400, 0}, {400, 100}, {300, 100}}};
+  const double scores[] = {0.5, 0.9, 0.7};
+  for (size_t i = 0; i < 3; ++i) {
+    inst[i].outline = outlines[i];
+    inst[i].score = scores[i];
+    inst[i].grasp = outlines[i][0] + cv::Point2f(50, 50);
+  }
+  assess_occlusion(inst, {box_model()}, {500, 200});
+  EXPECT_EQ(inst[0].pick_order, 3);
+  EXPECT_EQ(inst[1].pick_order, 1);
+  EXPECT_EQ(inst[2].pick_order, 2);
+}
