@@ -14,8 +14,8 @@ GST_PLUGIN_PATH=<builddir>/gst, or PICKDETECT_BUILD_DIR=<builddir>, or --build-d
 
 Output, one line per instance:
     frame=0 pts=0:00:00.000000000 roi=0 model=box center=(187.03,223.92) angle=8.41 scale=0.537
-    score=0.885 matches=78 visibility=1.00 pickable=yes pick-order=1 grasp=(187.03,223.92)
-    bbox=89,161+196x138
+    score=0.885 matches=78 visibility=1.00 covered=no pickable=yes pick-order=1
+    grasp=(187.03,223.92) bbox=89,161+196x138
 (on one line) and "frame=N instances=0" for a frame without any.
 """
 import argparse
@@ -31,7 +31,8 @@ def main():
     parser.add_argument("input", nargs="?", default=os.path.join(DATA, "box_in_scene.png"),
                         help="picture or video file (default: OpenCV's box_in_scene.png)")
     parser.add_argument("--model", default=os.path.join(DATA, "box.png"),
-                        help="model file (.yml) or picture (default: OpenCV's box.png)")
+                        help="model file (.yml), picture or model set, or several separated "
+                             "by commas (default: OpenCV's box.png)")
     parser.add_argument("--frames", type=int, default=3,
                         help="how many frames to make of a picture (default: 3)")
     parser.add_argument("--build-dir", default=os.environ.get("PICKDETECT_BUILD_DIR"),
@@ -82,11 +83,12 @@ def main():
             d = lambda name: s.get_double(name)[1]
             i = lambda name: s.get_int(name)[1]
             print("frame=%d pts=%s roi=%d model=%s center=(%.2f,%.2f) angle=%.2f scale=%.3f "
-                  "score=%.3f matches=%d visibility=%.2f pickable=%s pick-order=%d "
+                  "score=%.3f matches=%d visibility=%.2f covered=%s pickable=%s pick-order=%d "
                   "grasp=(%.2f,%.2f) bbox=%d,%d+%dx%d points=%d"
                   % (frame[0], Gst.TIME_ARGS(buf.pts), roi.id, GLib.quark_to_string(roi.roi_type),
                      d("center-x"), d("center-y"), d("angle"), d("scale"), d("score"),
                      i("matches"), d("visibility"),
+                     "yes" if s.get_boolean("covered")[1] else "no",
                      "yes" if s.get_boolean("pickable")[1] else "no", i("pick-order"),
                      d("grasp-x"), d("grasp-y"), roi.x, roi.y, roi.w, roi.h,
                      len(list(s.get_value("points"))) // 2))

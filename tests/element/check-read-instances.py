@@ -24,7 +24,7 @@ if result.returncode != 0:
 
 # The box in box_in_scene.png: centre near (187, 224), turned a little clockwise, about half size.
 line = re.compile(r"^frame=(\d+) pts=\S+ roi=\d+ model=box center=\(([\d.]+),([\d.]+)\) "
-                  r"angle=([\d.]+) scale=([\d.]+) score=([\d.]+) matches=(\d+) .*pickable=yes "
+                  r"angle=([\d.]+) scale=([\d.]+) score=([\d.]+) matches=(\d+) .*covered=no pickable=yes "
                   r"pick-order=1 .*bbox=\d+,\d+\+\d+x\d+ points=5$")
 frames = []
 for text in result.stdout.splitlines():

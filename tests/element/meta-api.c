@@ -42,9 +42,10 @@ int main(int argc, char** argv) {
   instance.points = points;
   instance.n_outline = 4;
   instance.outline = outline;
-  instance.visibility = 1.0;
-  instance.pickable = TRUE;
-  instance.pick_order = 1;
+  instance.visibility = 0.75;
+  instance.covered = TRUE;
+  instance.pickable = FALSE;
+  instance.pick_order = 0;
   instance.grasp_x = 100.0;
   instance.grasp_y = 50.0;
   instance.grasp_angle = 30.0;
@@ -58,6 +59,7 @@ int main(int argc, char** argv) {
   const GstPickDetectInstance* got = gst_pickdetect_meta_get_instance(meta, 0);
   CHECK(strcmp(got->model_name, "box") == 0);
   CHECK(got->points[0].x == 100.0 && got->n_outline == 4 && got->matches == 42);
+  CHECK(got->visibility == 0.75 && got->covered && !got->pickable && got->pick_order == 0);
 
   /* The API type carries the video tags that let videoscale and videoconvert keep it. */
   CHECK(gst_meta_api_type_has_tag(GST_PICKDETECT_META_API_TYPE,
@@ -74,6 +76,7 @@ int main(int argc, char** argv) {
   CHECK(copied != NULL && copied != meta && copied->n_instances == 1);
   CHECK(copied->instances[0].points != got->points);
   CHECK(copied->instances[0].outline[2].x == 130.0);
+  CHECK(copied->instances[0].covered && !copied->instances[0].pickable);
 
   /* The videoscale transform: 640x480 -> 320x240 halves everything. */
   GstVideoInfo in_info, out_info;
@@ -89,6 +92,8 @@ int main(int argc, char** argv) {
   CHECK(h->center_x == 50.0 && h->center_y == 25.0 && h->grasp_x == 50.0);
   CHECK(h->outline[2].x == 65.0 && h->outline[2].y == 35.0 && h->points[1].y == 20.0);
   CHECK(fabs(h->scale - 0.4) < 1e-12 && h->angle == 30.0);
+  /* Occlusion does not change with the frame's size. */
+  CHECK(h->covered && !h->pickable && h->pick_order == 0 && h->visibility == 0.75);
 
   gst_buffer_unref(scaled);
   gst_buffer_unref(copy);

@@ -51,8 +51,12 @@ typedef struct {
  * @points: (array length=n_points): principal points; points[0] is the centre
  * @n_outline: number of outline vertices
  * @outline: (array length=n_outline): outline polygon
- * @visibility: estimated share of the outline that lies in the frame, in [0, 1]
- * @pickable: %TRUE when no other detected instance lies on this one
+ * @visibility: estimated share of the outline that is seen (inside the frame and under no other
+ *   instance), in [0, 1]
+ * @covered: %TRUE when another detected instance lies on this one (or when which of two
+ *   overlapping instances is on top could not be told)
+ * @pickable: %TRUE when a gripper may take it now: not covered, grasp point in the frame and
+ *   enough of it seen
  * @pick_order: 1 = pick first among the pickable instances, 2 = next, ...; 0 = not pickable
  * @grasp_x: grasp point column in pixels
  * @grasp_y: grasp point row in pixels
@@ -73,6 +77,7 @@ typedef struct {
   guint n_outline;
   GstPickDetectPoint* outline;
   gdouble visibility;
+  gboolean covered;
   gboolean pickable;
   gint pick_order;
   gdouble grasp_x;
