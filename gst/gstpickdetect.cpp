@@ -3,12 +3,15 @@
  * SECTION:element-pickdetect
  * @title: pickdetect
  *
- * Finds every instance of a known object in each video frame, for pick-and-place: SIFT features
- * of the frame are matched against those of a model picture, every match votes for where the
- * object's principal points (centre, grasping / delimiting points) lie, and mean shift gathers
- * the votes into instances. Each instance comes with its centre, angle, scale, principal points,
- * outline, score, visibility, whether it can be picked (nothing found lies on it) and in which
- * order, and its grasp point.
+ * Finds every instance of one or several known objects in each video frame, for pick-and-place:
+ * SIFT features of the frame are extracted once and matched against those of all the model
+ * pictures together (a feature that fits two models about equally well decides for neither),
+ * every match votes for where its object's principal points (centre, grasping / delimiting
+ * points) lie, and mean shift gathers the votes into instances. Each instance comes with its
+ * model's name, centre, angle, scale, principal points, outline, score, visibility, whether
+ * another instance lies on it (covered), whether it can be picked and in which order, and its
+ * grasp point. Which of two overlapping instances lies on top, and so which can be picked, is
+ * decided by the detection core; the element reports it as it is.
  *
  * The frame is worked on in place and its pixels are left untouched unless #GstPickDetect:draw
  * is set. Detection reads the grey or luma plane of the frame where the format has one, and a
@@ -20,32 +23,40 @@
  * - one #GstVideoRegionOfInterestMeta per instance: roi_type is the model name, the rectangle
  *   the outline's bounding box clipped to the frame, and a "pick-instance" #GstStructure param
  *   with fields model (string), center-x, center-y, angle, scale, score, visibility, grasp-x,
- *   grasp-y, grasp-angle (double), matches, pick-order (int), pickable (boolean), points and
- *   outline (#GstValueArray of doubles x0, y0, x1, y1, ...; points starts with the centre).
- *   Through videoscale GStreamer rescales the ROI rectangle but copies its params as they are,
- *   so after scaling read coordinates from the GstPickDetectMeta, which is rescaled whole.
+ *   grasp-y, grasp-angle (double), matches, pick-order (int), covered, pickable (boolean),
+ *   points and outline (#GstValueArray of doubles x0, y0, x1, y1, ...; points starts with the
+ * centre). Through videoscale GStreamer rescales the ROI rectangle but copies its params as they
+ * are, so after scaling read coordinates from the GstPickDetectMeta, which is rescaled whole.
  *
  * With #GstPickDetect:post-messages (the default, as facedetect's updates=every_frame), an
  * element message named "pickdetect" is posted for each frame, with fields timestamp,
  * stream-time, running-time, duration (guint64) and instances (a #GstValueList of the
  * "pick-instance" structures above).
  *
- * Properties: #GstPickDetect:model is the model file (.yml / .yaml) or a plain picture of the
- * object; #GstPickDetect:method chooses voting (the paper's method) or one of the RANSAC
- * baselines; #GstPickDetect:ratio is the 2NN ratio test threshold; #GstPickDetect:min-matches
- * is the fewest matches an instance needs; #GstPickDetect:bandwidth is the mean-shift radius in
- * pixels (0 = automatic); #GstPickDetect:max-instances caps the instances per model (0 = no
- * limit); #GstPickDetect:allow-scale lets instances be larger or smaller than the model;
- * #GstPickDetect:draw draws the instances into the frame; #GstPickDetect:post-messages posts
+ * Properties: #GstPickDetect:model names the objects to find: a model file (.yml / .yaml), a
+ * plain picture of the object, or a model-set file (a YAML file with a `models:` list of model
+ * files and pictures, relative to the set file), or several of these separated by commas
+ * (`model=cookies.yml,flyer.yml`). All models are searched for together in every frame and
+ * each instance names its model; model names must differ. #GstPickDetect:method chooses voting (the
+ * paper's method) or one of the RANSAC baselines; #GstPickDetect:ratio is the 2NN ratio test
+ * threshold; #GstPickDetect:min-matches is the fewest matches an instance needs;
+ * #GstPickDetect:bandwidth is the mean-shift radius in pixels (0 = automatic);
+ * #GstPickDetect:max-instances caps the instances per frame, over all models (0 = no limit);
+ * #GstPickDetect:allow-scale lets instances be larger or smaller than the model;
+ * #GstPickDetect:draw draws the instances into the frame (pickable ones outlined in green with
+ * their pick order, covered ones in red, each labelled with its model's name);
+ * #GstPickDetect:post-messages posts
  * the bus messages. All can be changed while playing; a frame is always processed with one
  * consistent set of them.
  *
  * A model that cannot be loaded when the element starts (READY to PAUSED) is an error
  * (resource not-found, open-read or settings, the message naming the file and the reason) and
- * the state change fails; so is starting with no model at all. A new model set while playing is
- * loaded in the thread that sets it (it may take a second) while frames keep going with the old
- * one, and takes effect between two frames. If that load fails, a warning is posted, the old
- * model stays and the property reads back the old file.
+ * the state change fails; so is starting with no model at all, a list with an empty entry, or
+ * two models of the same name. Setting #GstPickDetect:model while playing (to add, remove or
+ * replace models, give the whole new list) loads every model of the new value in the thread
+ * that sets it (it may take a second) while frames keep going with the old ones; the new set
+ * then takes effect between two frames, whole. If any of it fails to load, a warning is posted,
+ * the old models stay and the property reads back the old value.
  *
  * Metadata policy: the element never changes the frame's geometry, so the metas of the input
  * buffer stay on it (it works in place); when a copy is needed, metas tagged only with video,
@@ -72,12 +83,14 @@
 #include <gst/video/video.h>
 #include <glib/gstdio.h>
 
+#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <exception>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <unistd.h>
 #include <utility>
@@ -224,26 +237,131 @@ static GstPickDetectMethod from_core_method(pickdetect::Method method) {
 /* ------------------------------------------------------------------------------------------- */
 /* Model loading                                                                               */
 
-/// Builds a detector for the model file; nullptr and `failure` filled when it cannot. Never
-/// throws.
-static std::shared_ptr<const pickdetect::Detector> load_detector(const std::string& path,
+/// How a failure to read `path` is reported: not found, unreadable, or wrong contents.
+static GstResourceError file_error_code(const std::string& path) {
+  if (!g_file_test(path.c_str(), G_FILE_TEST_EXISTS))
+    return GST_RESOURCE_ERROR_NOT_FOUND;
+  if (g_access(path.c_str(), R_OK) != 0 || g_file_test(path.c_str(), G_FILE_TEST_IS_DIR))
+    return GST_RESOURCE_ERROR_OPEN_READ;
+  return GST_RESOURCE_ERROR_SETTINGS;
+}
+
+/// The entries of the `model` property: split at commas, blanks around each entry trimmed.
+static std::vector<std::string> split_model_list(const std::string& value) {
+  std::vector<std::string> entries;
+  gchar** parts = g_strsplit(value.c_str(), ",", -1);
+  for (gchar** p = parts; *p; ++p)
+    entries.emplace_back(g_strstrip(*p));
+  g_strfreev(parts);
+  return entries;
+}
+
+/// Whether the core reads `path` as a structured file (YAML, JSON or XML) rather than a picture.
+static bool is_structured_file(const std::string& path) {
+  gchar* lower = g_ascii_strdown(path.c_str(), -1);
+  std::string name(lower);
+  g_free(lower);
+  if (g_str_has_suffix(name.c_str(), ".gz"))
+    name.resize(name.size() - 3);
+  for (const char* ext : {".yml", ".yaml", ".json", ".xml"})
+    if (g_str_has_suffix(name.c_str(), ext))
+      return true;
+  return false;
+}
+
+/// Reads a model-set file (a structured file with a `models` list and no `image`) into the
+/// paths of its models, made relative to the set file's folder. Returns false when `path` is
+/// not a model set (it is then a model file or picture, or broken, which load_model reports).
+/// Throws std::runtime_error when it is a model set that is malformed.
+static bool read_model_set(const std::string& path, std::vector<std::string>& models) {
+  if (!is_structured_file(path) || !g_file_test(path.c_str(), G_FILE_TEST_IS_REGULAR))
+    return false;
+  cv::FileStorage store;
+  try {
+    if (!store.open(path, cv::FileStorage::READ))
+      return false;
+  } catch (const cv::Exception&) {
+    return false;
+  }
+  const cv::FileNode root = store.root();
+  if (!root.isMap() || root["models"].empty() || !root["image"].empty())
+    return false;
+  const std::string origin = "model set \"" + path + "\"";
+  const cv::FileNode list = root["models"];
+  if (!list.isSeq() || list.size() == 0)
+    throw std::runtime_error(origin + ": 'models' must be a non-empty list of model files");
+  gchar* dir = g_path_get_dirname(path.c_str());
+  const std::string folder(dir);
+  g_free(dir);
+  for (size_t i = 0; i < list.size(); i++) {
+    const cv::FileNode item = list[static_cast<int>(i)];
+    const std::string entry = item.isString() ? static_cast<std::string>(item) : std::string();
+    if (entry.empty())
+      throw std::runtime_error(origin + ": models[" + std::to_string(i) +
+                               "] must be the path of a model file or picture");
+    if (g_path_is_absolute(entry.c_str())) {
+      models.push_back(entry);
+    } else {
+      gchar* joined = g_build_filename(folder.c_str(), entry.c_str(), nullptr);
+      models.emplace_back(joined);
+      g_free(joined);
+    }
+  }
+  return true;
+}
+
+/// Builds one detector over every model the `model` property names (see its blurb): a
+/// comma-separated list of model files, pictures and model-set files. nullptr and `failure`
+/// filled when any of them cannot be loaded, when two models share a name, or when the list
+/// has an empty entry. Never throws.
+static std::shared_ptr<const pickdetect::Detector> load_detector(const std::string& value,
                                                                  LoadFailure& failure) {
+  std::string path = value; // The file being read when something failed.
   std::string reason;
   try {
     std::vector<pickdetect::Model> models;
-    models.push_back(pickdetect::load_model(path));
+    std::vector<std::string> sources; // The file each model came from.
+    for (const std::string& entry : split_model_list(value)) {
+      if (entry.empty()) {
+        failure.code = GST_RESOURCE_ERROR_SETTINGS;
+        failure.message = "Could not load the models \"" + value +
+                          "\": the comma-separated list has an empty entry";
+        return nullptr;
+      }
+      path = entry;
+      std::vector<std::string> listed;
+      if (!read_model_set(entry, listed))
+        listed.push_back(entry);
+      for (const std::string& file : listed) {
+        path = file;
+        std::vector<std::string> nested;
+        if (file != entry && read_model_set(file, nested))
+          throw std::runtime_error("model set \"" + entry + "\" lists another model set, \"" +
+                                   file + "\"; list that set's models instead");
+        models.push_back(pickdetect::load_model(file));
+        sources.push_back(file);
+      }
+    }
+    // Instances are told apart by their model's name only; the same model twice would also
+    // make every one of its features ambiguous, so that none would match.
+    for (size_t i = 0; i < models.size(); i++) {
+      for (size_t j = 0; j < i; j++) {
+        if (models[i].name == models[j].name) {
+          failure.code = GST_RESOURCE_ERROR_SETTINGS;
+          failure.message = "Could not load the models \"" + value + "\": two models are named \"" +
+                            models[i].name + "\" (" + sources[j] + " and " + sources[i] +
+                            "); give each model a distinct name (the `name` key of a model file)";
+          return nullptr;
+        }
+      }
+    }
     return std::make_shared<const pickdetect::Detector>(std::move(models));
   } catch (const std::exception& e) {
     reason = e.what();
   } catch (...) {
     reason = "unknown error";
   }
-  if (!g_file_test(path.c_str(), G_FILE_TEST_EXISTS))
-    failure.code = GST_RESOURCE_ERROR_NOT_FOUND;
-  else if (g_access(path.c_str(), R_OK) != 0 || g_file_test(path.c_str(), G_FILE_TEST_IS_DIR))
-    failure.code = GST_RESOURCE_ERROR_OPEN_READ;
-  else
-    failure.code = GST_RESOURCE_ERROR_SETTINGS;
+  failure.code = file_error_code(path);
   if (reason.find(path) != std::string::npos)
     failure.message = "Could not load the model: " + reason;
   else
@@ -591,11 +709,12 @@ static GstStructure* instance_structure(const pickdetect::Instance& instance) {
       G_TYPE_DOUBLE, static_cast<double>(instance.center.x), "center-y", G_TYPE_DOUBLE,
       static_cast<double>(instance.center.y), "angle", G_TYPE_DOUBLE, instance.angle, "scale",
       G_TYPE_DOUBLE, instance.scale, "score", G_TYPE_DOUBLE, instance.score, "matches", G_TYPE_INT,
-      instance.matches, "visibility", G_TYPE_DOUBLE, instance.visibility, "pickable",
-      G_TYPE_BOOLEAN, static_cast<gboolean>(instance.pickable), "pick-order", G_TYPE_INT,
-      instance.pick_order, "grasp-x", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.x),
-      "grasp-y", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.y), "grasp-angle", G_TYPE_DOUBLE,
-      instance.grasp_angle, nullptr);
+      instance.matches, "visibility", G_TYPE_DOUBLE, instance.visibility, "covered", G_TYPE_BOOLEAN,
+      static_cast<gboolean>(instance.covered), "pickable", G_TYPE_BOOLEAN,
+      static_cast<gboolean>(instance.pickable), "pick-order", G_TYPE_INT, instance.pick_order,
+      "grasp-x", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.x), "grasp-y", G_TYPE_DOUBLE,
+      static_cast<double>(instance.grasp.y), "grasp-angle", G_TYPE_DOUBLE, instance.grasp_angle,
+      nullptr);
   GValue points = double_array(instance.points);
   gst_structure_take_value(s, "points", &points);
   GValue outline = double_array(instance.outline);
@@ -631,7 +750,8 @@ static void attach_metas(GstPickDetect* self, GstBuffer* buffer, int width, int 
     out.n_outline = static_cast<guint>(outline.size());
     out.outline = outline.data();
     out.visibility = in.visibility;
-    out.pickable = in.pickable;
+    out.covered = in.covered;
+    out.pickable = in.pickable; // The core's decision, reported as it is.
     out.pick_order = in.pick_order;
     out.grasp_x = in.grasp.x;
     out.grasp_y = in.grasp.y;
@@ -766,10 +886,11 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_MODEL,
       g_param_spec_string("model", "Model",
-                          "Model file (.yml / .yaml) or plain picture of the object to find. "
-                          "Required. Set while playing, it is loaded and then used from the next "
-                          "frame on; if it cannot be loaded a warning is posted and the old model "
-                          "stays",
+                          "The objects to find: model files (.yml / .yaml), plain pictures or "
+                          "model-set files (YAML with a 'models' list), several separated by "
+                          "commas; all are searched for at once. Required. Set while playing, the "
+                          "new list is loaded and then used whole from the next frame on; if any "
+                          "of it cannot be loaded a warning is posted and the old models stay",
                           DEFAULT_MODEL, flags));
   g_object_class_install_property(
       gobject_class, PROP_METHOD,
@@ -797,8 +918,9 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
       gobject_class, PROP_MAX_INSTANCES,
       g_param_spec_int(
           "max-instances", "Maximum instances",
-          "At most this many instances of the model per frame, best first; 0 = no limit", 0,
-          G_MAXINT, DEFAULT_MAX_INSTANCES, flags));
+          "At most this many instances per frame (all models together), best first; 0 = no "
+          "limit",
+          0, G_MAXINT, DEFAULT_MAX_INSTANCES, flags));
   g_object_class_install_property(
       gobject_class, PROP_ALLOW_SCALE,
       g_param_spec_boolean("allow-scale", "Allow scale",
@@ -807,11 +929,14 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
                            DEFAULT_ALLOW_SCALE, flags));
   g_object_class_install_property(
       gobject_class, PROP_DRAW,
-      g_param_spec_boolean("draw", "Draw",
-                           "Draw each instance into the frame: white outline, green circle on the "
-                           "centre with the number of matches, small circles on the other "
-                           "principal points (otherwise pixels are left untouched)",
-                           DEFAULT_DRAW, flags));
+      g_param_spec_boolean(
+          "draw", "Draw",
+          "Draw each instance into the frame: outline in green with its pick "
+          "order (#1, #2...) when pickable, in red when covered, orange otherwise; "
+          "its model's name; green circle on the centre with the number of "
+          "matches; small circles on the other principal points (otherwise "
+          "pixels are left untouched)",
+          DEFAULT_DRAW, flags));
   g_object_class_install_property(
       gobject_class, PROP_POST_MESSAGES,
       g_param_spec_boolean("post-messages", "Post messages",
@@ -821,8 +946,8 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
 
   gst_element_class_set_static_metadata(
       element_class, "Pick detection", "Filter/Analyzer/Video",
-      "Finds every instance of a known object in each frame (SIFT matches, votes, mean shift) "
-      "and attaches them as metadata",
+      "Finds every instance of one or several known objects in each frame (SIFT matches, votes, "
+      "mean shift) and attaches them as metadata",
       "gst-pickdetect authors");
   gst_element_class_add_static_pad_template(element_class, &sink_template);
   gst_element_class_add_static_pad_template(element_class, &src_template);
