@@ -13,18 +13,26 @@ namespace {
 
 constexpr Rgb kWhite{255, 255, 255};
 constexpr Rgb kGreen{0, 255, 0};
-constexpr Rgb kPointColours[] = {{0, 0, 255}, {255, 0, 255}, {255, 255, 0}, {0, 255, 0}};
+constexpr Rgb kRed{255, 0, 0};
+constexpr Rgb kOrange{255, 160, 0};
+// No green or red among the points: those tell pickable from covered.
+constexpr Rgb kPointColours[] = {{0, 0, 255}, {255, 0, 255}, {255, 255, 0}, {0, 255, 255}};
 
 constexpr int kShift = 4; // Sub-pixel bits for OpenCV's drawing functions.
 constexpr double kOne = 1 << kShift;
 
 constexpr int kOutlineThickness = 2;
+constexpr int kPickableOutlineThickness = 3;
 constexpr int kCentreRadius = 12;
 constexpr int kCentreThickness = 3;
 constexpr int kPointRadius = 5;
 constexpr int kPointThickness = 2;
 constexpr double kFontScale = 0.7;
 constexpr int kFontThickness = 2;
+constexpr double kOrderFontScale = 1.3; // The pick order, "#1".
+constexpr int kOrderFontThickness = 3;
+constexpr double kLabelFontScale = 0.55; // The model's name.
+constexpr int kLabelFontThickness = 2;
 
 int clamp8(double v) {
   return static_cast<int>(std::lround(std::clamp(v, 0.0, 255.0)));
@@ -176,17 +184,21 @@ void Overlay::draw(GstVideoFrame& frame, const std::vector<pickdetect::Instance>
       const bool halo = halo_ && pass == 0;
       const int extra = halo ? 2 : 0;
       auto paint = [&](Rgb rgb) { return halo ? cv::Scalar::all(0) : colour(layer, rgb); };
-      const cv::Scalar white = paint(kWhite);
       const cv::Scalar green = paint(kGreen);
 
       for (const pickdetect::Instance& instance : instances) {
+        // Pickable: green, thick, with its pick order. Covered: red. Neither (e.g. mostly out of
+        // the frame): orange.
+        const Rgb state = instance.pickable ? kGreen : instance.covered ? kRed : kOrange;
         std::vector<cv::Point> outline;
         outline.reserve(instance.outline.size());
         for (const cv::Point2f& p : instance.outline)
           outline.push_back(at(p));
         if (outline.size() >= 2)
-          cv::polylines(plane, outline, true, white, thickness(kOutlineThickness) + extra,
-                        cv::LINE_AA, kShift);
+          cv::polylines(
+              plane, outline, true, paint(state),
+              thickness(instance.pickable ? kPickableOutlineThickness : kOutlineThickness) + extra,
+              cv::LINE_AA, kShift);
 
         for (size_t i = 1; i < instance.points.size(); i++) {
           const Rgb& c =
@@ -195,14 +207,43 @@ void Overlay::draw(GstVideoFrame& frame, const std::vector<pickdetect::Instance>
                      thickness(kPointThickness) + extra, cv::LINE_AA, kShift);
         }
 
+        // Text is placed in frame pixels, then carried into the plane like the points.
+        auto text = [&](const std::string& str, cv::Point2d frame_at, double font_scale,
+                        int font_thickness, const cv::Scalar& colour) {
+          const cv::Point plane_at(static_cast<int>(std::lround(frame_at.x * layer.sx)),
+                                   static_cast<int>(std::lround(frame_at.y * layer.sy)));
+          cv::putText(plane, str, plane_at, cv::FONT_HERSHEY_SIMPLEX, font_scale * s, colour,
+                      thickness(font_thickness) + extra, cv::LINE_AA);
+        };
+        auto text_size = [](const std::string& str, double font_scale, int font_thickness) {
+          int baseline = 0;
+          return cv::getTextSize(str, cv::FONT_HERSHEY_SIMPLEX, font_scale, font_thickness,
+                                 &baseline);
+        };
+
         const cv::Point2f centre = instance.points.empty() ? instance.center : instance.points[0];
         cv::circle(plane, at(centre), radius(kCentreRadius), green,
                    thickness(kCentreThickness) + extra, cv::LINE_AA, kShift);
-        const cv::Point text_at(
-            static_cast<int>(std::lround((centre.x + kCentreRadius + 4) * layer.sx)),
-            static_cast<int>(std::lround((centre.y - kCentreRadius - 4) * layer.sy)));
-        cv::putText(plane, std::to_string(instance.matches), text_at, cv::FONT_HERSHEY_SIMPLEX,
-                    kFontScale * s, green, thickness(kFontThickness) + extra, cv::LINE_AA);
+        text(std::to_string(instance.matches),
+             {centre.x + kCentreRadius + 4.0, centre.y - kCentreRadius - 4.0}, kFontScale,
+             kFontThickness, green);
+
+        // The model's name, centred under the centre circle.
+        const cv::Size label = text_size(instance.model_name, kLabelFontScale, kLabelFontThickness);
+        const cv::Point2d label_at(centre.x - label.width / 2.0,
+                                   centre.y + kCentreRadius + 6.0 + label.height);
+        if (!halo) // White letters on a dark rim, readable on light objects too.
+          text(instance.model_name, label_at, kLabelFontScale, kLabelFontThickness + 2,
+               colour(layer, Rgb{0, 0, 0}));
+        text(instance.model_name, label_at, kLabelFontScale, kLabelFontThickness, paint(kWhite));
+
+        // The pick order, large, above left of the centre circle (the matches are above right).
+        if (instance.pickable && instance.pick_order > 0) {
+          const std::string order = "#" + std::to_string(instance.pick_order);
+          const cv::Size size = text_size(order, kOrderFontScale, kOrderFontThickness);
+          text(order, {centre.x - kCentreRadius - 4.0 - size.width, centre.y - kCentreRadius - 4.0},
+               kOrderFontScale, kOrderFontThickness, green);
+        }
       }
     }
   }

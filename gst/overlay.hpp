@@ -17,11 +17,14 @@ struct Rgb {
   int r, g, b;
 };
 
-/// Draws instances straight into mapped video frames: outlines in white, a large green circle on
-/// the centre with the number of matches beside it, small blue / magenta / yellow / green circles
-/// on the other principal points. Packed RGB is drawn with the channel order of the format, grey
-/// in grey levels over a black halo, YUV on the luma plane and on the subsampled chroma planes with
-/// the colours converted with the stream's colour matrix (BT.601 when the caps do not say).
+/// Draws instances straight into mapped video frames (the paper's Fig. 5, plus what a picker
+/// needs): the outline in green with the pick order ("#1", "#2"...) in large green figures left
+/// of the centre when the instance is pickable, in red when it is covered, in orange otherwise;
+/// a large green circle on the centre with the number of matches beside it; the model's name in
+/// white under it; small blue / magenta / yellow / cyan circles on the other principal points.
+/// Packed RGB is drawn with the channel order of the format, grey in grey levels over a black halo,
+/// YUV on the luma plane and on the subsampled chroma planes with the colours converted with the
+/// stream's colour matrix (BT.601 when the caps do not say).
 class Overlay {
 public:
   /// Chooses, once per caps, which planes to draw on and how colours map onto them. Returns false

@@ -2,8 +2,10 @@
 // Tests of the pickdetect element with GstHarness, on synthetic frames: copies of box.png pasted
 // at known poses onto a noisy background.
 // OpenCV comes before gstcheck.h, whose `fail` macro would clash with OpenCV's identifiers.
+#include <pickdetect/detector.hpp>
 #include <pickdetect/model.hpp>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <glib/gstdio.h>
@@ -273,10 +275,12 @@ GST_START_TEST(test_draw_colours) {
     const int green_before = count_pixels(before, {0, 170, 0}, {90, 255, 90});
     const int green = count_pixels(after, {0, 170, 0}, {90, 255, 90});
     const int blue = count_pixels(after, {0, 0, 170}, {90, 90, 255});
-    const int white = count_pixels(after, {250, 250, 250}, {255, 255, 255});
-    const int white_before = count_pixels(before, {250, 250, 250}, {255, 255, 255});
+    const int red = count_pixels(after, {170, 0, 0}, {255, 90, 90});
+    // The model's name is in thin white letters (anti-aliased).
+    const int white = count_pixels(after, {230, 230, 230}, {255, 255, 255});
+    const int white_before = count_pixels(before, {230, 230, 230}, {255, 255, 255});
     fail_unless_equals_int(green_before, 0);
-    fail_unless(white > white_before + 200, "%s: outline missing (%d white pixels, %d before)",
+    fail_unless(white > white_before + 20, "%s: model name missing (%d white pixels, %d before)",
                 format, white, white_before);
     if (grey) {
       // Grey levels: the green centre circle is drawn at green's luma (150).
@@ -284,8 +288,10 @@ GST_START_TEST(test_draw_colours) {
       const int luma_green_before = count_pixels(before, {145, 145, 145}, {155, 155, 155});
       fail_unless(luma_green > luma_green_before + 50, "GRAY8: centre circle missing");
     } else {
-      fail_unless(green > 100, "%s: only %d green pixels", format, green);
+      // Both boxes are pickable: two green outlines (each over 600 px long), no red.
+      fail_unless(green > 1500, "%s: only %d green pixels", format, green);
       fail_unless(blue > 10, "%s: only %d blue pixels", format, blue);
+      fail_unless(red < 5, "%s: %d red pixels, but nothing is covered", format, red);
     }
     gst_buffer_unref(original);
     gst_buffer_unref(out);
@@ -328,6 +334,7 @@ static void check_structure_matches(const GstStructure* s, const GstPickDetectIn
   fail_unless(gst_structure_get_int(s, "matches", &i) && i == in->matches);
   fail_unless(gst_structure_get_int(s, "pick-order", &i) && i == in->pick_order);
   fail_unless(gst_structure_get_boolean(s, "pickable", &b) && !b == !in->pickable);
+  fail_unless(gst_structure_get_boolean(s, "covered", &b) && !b == !in->covered);
   const std::vector<double> points = double_array(s, "points");
   fail_unless_equals_int(points.size(), 2 * in->n_points);
   for (guint k = 0; k < in->n_points; k++)
@@ -370,6 +377,7 @@ GST_START_TEST(test_meta_roi_message) {
     fail_unless(in_->n_points >= 1 && in_->n_outline >= 3);
     fail_unless(in_->points[0].x == in_->center_x && in_->points[0].y == in_->center_y);
     fail_unless(in_->visibility > 0.9);
+    fail_unless(!in_->covered);
     fail_unless(in_->pickable); // The two boxes do not overlap.
     fail_unless(in_->pick_order >= 1 && in_->pick_order <= 2);
   }
@@ -517,9 +525,10 @@ GST_START_TEST(test_meta_through_videoscale_videoconvert) {
     fail_unless_equals_string(d->model_name, a->model_name);
     fail_unless(d->center_x == a->center_x && d->center_y == a->center_y && d->angle == a->angle &&
                 d->scale == a->scale && d->score == a->score && d->matches == a->matches &&
-                d->visibility == a->visibility && d->pickable == a->pickable &&
-                d->pick_order == a->pick_order && d->grasp_x == a->grasp_x &&
-                d->grasp_y == a->grasp_y && d->grasp_angle == a->grasp_angle);
+                d->visibility == a->visibility && d->covered == a->covered &&
+                d->pickable == a->pickable && d->pick_order == a->pick_order &&
+                d->grasp_x == a->grasp_x && d->grasp_y == a->grasp_y &&
+                d->grasp_angle == a->grasp_angle);
     fail_unless(d->n_points == a->n_points && d->n_outline == a->n_outline);
     fail_unless(std::memcmp(d->points, a->points, sizeof(GstPickDetectPoint) * a->n_points) == 0);
     fail_unless(std::memcmp(d->outline, a->outline, sizeof(GstPickDetectPoint) * a->n_outline) ==
@@ -695,6 +704,355 @@ GST_START_TEST(test_model_errors) {
 }
 GST_END_TEST;
 
+/* ---- Several models in one element; pickable and covered ---------------------------------- */
+
+/// A picture pasted into `scene` (grey) at `pose`, about the picture's centre.
+static void paste(cv::Mat& scene, const cv::Mat& picture, const Pose& pose) {
+  const cv::Point2f centre(picture.cols / 2.0f, picture.rows / 2.0f);
+  const cv::Mat m = pose_matrix(pose, centre);
+  const cv::Mat ones(picture.size(), CV_8UC1, cv::Scalar(255));
+  cv::Mat warped, mask;
+  cv::warpAffine(picture, warped, m, scene.size(), cv::INTER_LINEAR);
+  cv::warpAffine(ones, mask, m, scene.size(), cv::INTER_NEAREST);
+  warped.copyTo(scene, mask);
+}
+
+/// A look-alike of the box: box.png with its right half replaced by a piece of baboon.jpg, so
+/// that the two models share the left half. Written as `dir`/variant.png; returns the path.
+static std::string write_variant(const std::string& dir) {
+  const cv::Mat box = box_model().image;
+  cv::Mat variant = box.clone();
+  cv::Mat baboon = cv::imread(std::string(TEST_DATA_DIR) + "/baboon.jpg", cv::IMREAD_GRAYSCALE);
+  fail_unless(!baboon.empty(), "baboon.jpg missing from " TEST_DATA_DIR);
+  const cv::Rect right(box.cols / 2, 0, box.cols - box.cols / 2, box.rows);
+  cv::resize(baboon(cv::Rect(0, 0, baboon.cols / 2, baboon.rows / 2)), variant(right), right.size(),
+             0, 0, cv::INTER_AREA);
+  const std::string path = dir + "/variant.png";
+  fail_unless(cv::imwrite(path, variant));
+  return path;
+}
+
+/// A temporary folder, removed with what is in it.
+struct TempDir {
+  std::string path;
+  TempDir() {
+    gchar* dir = g_dir_make_tmp("pickdetect-XXXXXX", nullptr);
+    fail_unless(dir != nullptr);
+    path = dir;
+    g_free(dir);
+  }
+  ~TempDir() {
+    if (GDir* d = g_dir_open(path.c_str(), 0, nullptr)) {
+      while (const gchar* name = g_dir_read_name(d))
+        g_unlink((path + "/" + name).c_str());
+      g_dir_close(d);
+    }
+    g_rmdir(path.c_str());
+  }
+};
+
+/// The model names of the meta's instances, sorted.
+static std::vector<std::string> model_names(const GstPickDetectMeta* meta) {
+  std::vector<std::string> names;
+  for (guint k = 0; meta && k < meta->n_instances; k++)
+    names.emplace_back(meta->instances[k].model_name);
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+/// The meta's instance nearest to (x, y).
+static const GstPickDetectInstance* nearest(const GstPickDetectMeta* meta, double x, double y) {
+  const GstPickDetectInstance* best = nullptr;
+  for (guint k = 0; k < meta->n_instances; k++)
+    if (!best || std::hypot(meta->instances[k].center_x - x, meta->instances[k].center_y - y) <
+                     std::hypot(best->center_x - x, best->center_y - y))
+      best = &meta->instances[k];
+  return best;
+}
+
+// Two look-alike models in one element (the variant shares half of the box): each instance is
+// found once, under its own model's name, in the meta, the ROI metas and the bus message.
+GST_START_TEST(test_look_alike_models) {
+  TempDir dir;
+  const std::string variant_path = write_variant(dir.path);
+  const cv::Mat variant = cv::imread(variant_path, cv::IMREAD_GRAYSCALE);
+  const cv::Size size(640, 480);
+
+  GstHarness* h = pickdetect_harness();
+  g_object_set(h->element, "model", (kBoxPath + ", " + variant_path).c_str(), nullptr);
+  GstBus* bus = gst_bus_new();
+  gst_element_set_bus(h->element, bus);
+  gst_harness_set_src_caps_str(h, caps_string("GRAY8", size).c_str());
+
+  // Each model at each place in turn, so that the names follow the pictures, not the places.
+  for (int swap = 0; swap < 2; swap++) {
+    cv::Mat scene = make_scene(size, nullptr, false);
+    const Pose& box_pose = kPoses[swap];
+    const Pose& variant_pose = kPoses[1 - swap];
+    paste(scene, box_model().image, box_pose);
+    paste(scene, variant, variant_pose);
+    GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
+    const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
+    fail_unless(meta != nullptr);
+    fail_unless_equals_int(meta->n_instances, 2); // Neither is reported as both.
+    const GstPickDetectInstance* box = nearest(meta, box_pose.x, box_pose.y);
+    const GstPickDetectInstance* var = nearest(meta, variant_pose.x, variant_pose.y);
+    fail_unless(box != var);
+    fail_unless_equals_string(box->model_name, "box");
+    fail_unless_equals_string(var->model_name, "variant");
+    fail_unless(std::hypot(box->center_x - box_pose.x, box->center_y - box_pose.y) < 2.0,
+                "box at (%.1f, %.1f)", box->center_x, box->center_y);
+    fail_unless(std::hypot(var->center_x - variant_pose.x, var->center_y - variant_pose.y) < 2.0,
+                "variant at (%.1f, %.1f)", var->center_x, var->center_y);
+
+    // The ROI metas name the same model as the instance at their centre.
+    gpointer state = nullptr;
+    guint n_roi = 0;
+    while (GstMeta* m = gst_buffer_iterate_meta_filtered(
+               out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
+      auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+      const GstStructure* s = roi_param(roi);
+      double cx = 0, cy = 0;
+      fail_unless(gst_structure_get_double(s, "center-x", &cx) &&
+                  gst_structure_get_double(s, "center-y", &cy));
+      const GstPickDetectInstance* in = nearest(meta, cx, cy);
+      fail_unless_equals_string(g_quark_to_string(roi->roi_type), in->model_name);
+      check_structure_matches(s, in);
+      n_roi++;
+    }
+    fail_unless_equals_int(n_roi, 2);
+    GstMessage* msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT);
+    fail_unless(msg != nullptr);
+    const GValue* list = gst_structure_get_value(gst_message_get_structure(msg), "instances");
+    fail_unless_equals_int(gst_value_list_get_size(list), 2);
+    for (guint k = 0; k < 2; k++)
+      check_structure_matches(gst_value_get_structure(gst_value_list_get_value(list, k)),
+                              &meta->instances[k]);
+    gst_message_unref(msg);
+    gst_buffer_unref(out);
+  }
+  gst_element_set_bus(h->element, nullptr);
+  gst_object_unref(bus);
+  gst_harness_teardown(h);
+}
+GST_END_TEST;
+
+// Adding a model to the list while playing, then removing it: each takes effect from the next
+// frame on, the whole set at once.
+GST_START_TEST(test_add_remove_model_while_playing) {
+  TempDir dir;
+  const std::string variant_path = write_variant(dir.path);
+  const cv::Size size(640, 480);
+  cv::Mat scene = make_scene(size, nullptr, false);
+  paste(scene, box_model().image, kPoses[0]);
+  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
+
+  GstHarness* h = pickdetect_harness();
+  gst_harness_set_src_caps_str(h, caps_string("GRAY8", size).c_str());
+  auto names_of_next_frame = [&] {
+    GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
+    std::vector<std::string> names = model_names(gst_buffer_get_pickdetect_meta(out));
+    gst_buffer_unref(out);
+    return names;
+  };
+  auto count = [](const std::vector<std::string>& names, const char* name) {
+    return std::count(names.begin(), names.end(), name);
+  };
+
+  std::vector<std::string> names = names_of_next_frame();
+  fail_unless(!names.empty() && count(names, "box") == static_cast<long>(names.size()),
+              "box alone: something else than box found");
+
+  const std::string both = kBoxPath + "," + variant_path;
+  g_object_set(h->element, "model", both.c_str(), nullptr);
+  gchar* model = nullptr;
+  g_object_get(h->element, "model", &model, nullptr);
+  fail_unless_equals_string(model, both.c_str());
+  g_free(model);
+  for (int frame = 0; frame < 2; frame++) {
+    names = names_of_next_frame();
+    fail_unless(names == std::vector<std::string>({"box", "variant"}),
+                "with both models: %zu instances", names.size());
+  }
+
+  g_object_set(h->element, "model", kBoxPath.c_str(), nullptr);
+  names = names_of_next_frame();
+  fail_unless(!names.empty());
+  fail_unless_equals_int(count(names, "variant"), 0);
+  gst_harness_teardown(h);
+}
+GST_END_TEST;
+
+// A model-set file lists models relative to itself; a broken set, a missing model, two models of
+// one name or an empty list entry refuse the start, naming what is wrong.
+GST_START_TEST(test_model_set_file) {
+  TempDir dir;
+  const std::string variant_path = write_variant(dir.path);
+  const std::string set_path = dir.path + "/products.yml";
+  fail_unless(g_file_set_contents(
+      set_path.c_str(), ("%YAML:1.0\nmodels:\n  - \"" + kBoxPath + "\"\n  - variant.png\n").c_str(),
+      -1, nullptr));
+
+  cv::Mat scene = make_scene(cv::Size(640, 480), nullptr, false);
+  paste(scene, box_model().image, kPoses[0]);
+  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
+  GstHarness* h = pickdetect_harness();
+  g_object_set(h->element, "model", set_path.c_str(), nullptr);
+  gst_harness_set_src_caps_str(h, caps_string("GRAY8", cv::Size(640, 480)).c_str());
+  GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
+  fail_unless(model_names(gst_buffer_get_pickdetect_meta(out)) ==
+              std::vector<std::string>({"box", "variant"}));
+  gst_buffer_unref(out);
+  gst_harness_teardown(h);
+
+  auto expect_error = [](const std::string& model, GstResourceError code, const std::string& what) {
+    GError* err = start_error(("model=\"" + model + "\"").c_str());
+    fail_unless(g_error_matches(err, GST_RESOURCE_ERROR, code), "%s: %s", model.c_str(),
+                err->message);
+    fail_unless(std::strstr(err->message, what.c_str()) != nullptr, "%s", err->message);
+    g_error_free(err);
+  };
+  const std::string missing_set = dir.path + "/missing.yml";
+  fail_unless(
+      g_file_set_contents(missing_set.c_str(), "%YAML:1.0\nmodels: [gone.png]\n", -1, nullptr));
+  expect_error(missing_set, GST_RESOURCE_ERROR_NOT_FOUND, dir.path + "/gone.png");
+  const std::string empty_set = dir.path + "/empty.yml";
+  fail_unless(g_file_set_contents(empty_set.c_str(), "%YAML:1.0\nmodels: 3\n", -1, nullptr));
+  expect_error(empty_set, GST_RESOURCE_ERROR_SETTINGS, "'models' must be");
+  const std::string nested_set = dir.path + "/nested.yml";
+  fail_unless(
+      g_file_set_contents(nested_set.c_str(), "%YAML:1.0\nmodels: [products.yml]\n", -1, nullptr));
+  expect_error(nested_set, GST_RESOURCE_ERROR_SETTINGS, "lists another model set");
+  // box.png is in the set too: two models named "box".
+  expect_error(set_path + "," + kBoxPath, GST_RESOURCE_ERROR_SETTINGS,
+               "two models are named \"box\"");
+  expect_error(kBoxPath + ",," + variant_path, GST_RESOURCE_ERROR_SETTINGS, "empty entry");
+}
+GST_END_TEST;
+
+/// Whether any pixel within `r` of (x, y) is in [lo, hi].
+static bool colour_near(const cv::Mat& rgb, cv::Point2f p, int r, cv::Vec3b lo, cv::Vec3b hi) {
+  for (int dy = -r; dy <= r; dy++)
+    for (int dx = -r; dx <= r; dx++) {
+      const int x = static_cast<int>(std::lround(p.x)) + dx;
+      const int y = static_cast<int>(std::lround(p.y)) + dy;
+      if (x < 0 || y < 0 || x >= rgb.cols || y >= rgb.rows)
+        continue;
+      const cv::Vec3b c = rgb.at<cv::Vec3b>(y, x);
+      if (c[0] >= lo[0] && c[0] <= hi[0] && c[1] >= lo[1] && c[1] <= hi[1] && c[2] >= lo[2] &&
+          c[2] <= hi[2])
+        return true;
+    }
+  return false;
+}
+
+/// Points every 8 pixels along the instance's outline, leaving out those within `keep_off` of
+/// the other outline (where the two outlines cross).
+static std::vector<cv::Point2f> along_outline(const GstPickDetectInstance* in,
+                                              const GstPickDetectInstance* other, double keep_off) {
+  std::vector<cv::Point2f> other_outline;
+  for (guint k = 0; k < other->n_outline; k++)
+    other_outline.emplace_back(other->outline[k].x, other->outline[k].y);
+  std::vector<cv::Point2f> out;
+  for (guint k = 0; k < in->n_outline; k++) {
+    const GstPickDetectPoint a = in->outline[k], b = in->outline[(k + 1) % in->n_outline];
+    const double length = std::hypot(b.x - a.x, b.y - a.y);
+    for (double t = 12.0; t < length - 12.0; t += 8.0) {
+      const cv::Point2f p(a.x + (b.x - a.x) * t / length, a.y + (b.y - a.y) * t / length);
+      if (std::fabs(cv::pointPolygonTest(other_outline, p, true)) > keep_off)
+        out.push_back(p);
+    }
+  }
+  return out;
+}
+
+// One box lying across another: the element reports the core's covered / pickable / pick order
+// as they are, and draws the pickable one in green, the covered one in red, in every format.
+GST_START_TEST(test_pickable_and_covered) {
+  const cv::Size size(640, 480);
+  cv::Mat scene = make_scene(size, nullptr, false);
+  const Pose below{270.0, 220.0, 15.0, 0.7}, above{380.0, 290.0, 60.0, 0.7};
+  paste(scene, box_model().image, below);
+  paste(scene, box_model().image, above);
+
+  // The core on the same grey frame decides; the element must not decide otherwise.
+  const pickdetect::Detector detector({box_model()});
+  const pickdetect::Detection core = detector.detect(scene);
+
+  for (const char* format : kFormats) {
+    GstHarness* h = pickdetect_harness(true);
+    gst_harness_set_src_caps_str(h, caps_string(format, size).c_str());
+    GstBuffer* in = scene_buffer(scene, format);
+    GstBuffer* original = gst_buffer_copy_deep(in);
+    GstBuffer* out = gst_harness_push_and_pull(h, in);
+    const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
+    fail_unless(meta != nullptr);
+    fail_unless_equals_int(meta->n_instances, 2);
+    const GstPickDetectInstance* top = nearest(meta, above.x, above.y);
+    const GstPickDetectInstance* bottom = nearest(meta, below.x, below.y);
+    fail_unless(top != bottom);
+    fail_unless(top->pickable && !top->covered && top->pick_order == 1, "%s: top not pickable",
+                format);
+    fail_unless(!bottom->pickable && bottom->covered && bottom->pick_order == 0,
+                "%s: bottom not covered", format);
+    fail_unless(bottom->visibility < 0.95, "%s: bottom visibility %.3f", format,
+                bottom->visibility);
+    fail_unless_equals_int(core.instances.size(), 2);
+    for (const pickdetect::Instance& c : core.instances) {
+      const GstPickDetectInstance* e = nearest(meta, c.center.x, c.center.y);
+      fail_unless(std::hypot(e->center_x - c.center.x, e->center_y - c.center.y) < 0.5);
+      fail_unless(!e->pickable == !c.pickable && !e->covered == !c.covered &&
+                      e->pick_order == c.pick_order,
+                  "%s: the element's pickable / covered / order differ from the core's", format);
+      fail_unless(std::fabs(e->visibility - c.visibility) < 1e-9);
+    }
+
+    const cv::Mat before = to_rgb(original, format, size);
+    const cv::Mat after = to_rgb(out, format, size);
+    const std::vector<cv::Point2f> top_edge = along_outline(top, bottom, 8.0);
+    const std::vector<cv::Point2f> bottom_edge = along_outline(bottom, top, 8.0);
+    fail_unless(top_edge.size() > 40 && bottom_edge.size() > 40);
+    const bool grey = std::strcmp(format, "GRAY8") == 0;
+    // Grey levels: green is drawn at luma 150, red at 76.
+    const cv::Vec3b green_lo = grey ? cv::Vec3b(145, 145, 145) : cv::Vec3b(0, 170, 0);
+    const cv::Vec3b green_hi = grey ? cv::Vec3b(155, 155, 155) : cv::Vec3b(90, 255, 90);
+    const cv::Vec3b red_lo = grey ? cv::Vec3b(71, 71, 71) : cv::Vec3b(170, 0, 0);
+    const cv::Vec3b red_hi = grey ? cv::Vec3b(81, 81, 81) : cv::Vec3b(255, 90, 90);
+    auto share = [&](const cv::Mat& rgb, const std::vector<cv::Point2f>& pts, cv::Vec3b lo,
+                     cv::Vec3b hi) {
+      int n = 0;
+      for (const cv::Point2f& p : pts)
+        n += colour_near(rgb, p, 1, lo, hi);
+      return static_cast<double>(n) / pts.size();
+    };
+    const double top_green = share(after, top_edge, green_lo, green_hi);
+    const double bottom_red = share(after, bottom_edge, red_lo, red_hi);
+    fail_unless(top_green > 0.9, "%s: pickable outline green at %.2f of its length", format,
+                top_green);
+    fail_unless(bottom_red > 0.9, "%s: covered outline red at %.2f of its length", format,
+                bottom_red);
+    if (!grey) {
+      fail_unless(share(before, top_edge, green_lo, green_hi) == 0.0);
+      fail_unless(share(before, bottom_edge, red_lo, red_hi) == 0.0);
+      fail_unless(share(after, top_edge, red_lo, red_hi) < 0.05, "%s: red on the pickable", format);
+      fail_unless(share(after, bottom_edge, green_lo, green_hi) < 0.05, "%s: green on the covered",
+                  format);
+      // The big "#1" left above the top box's centre: a green blob the covered box lacks.
+      const cv::Rect order_box(static_cast<int>(top->center_x) - 60,
+                               static_cast<int>(top->center_y) - 45, 48, 35);
+      const cv::Rect no_order_box(static_cast<int>(bottom->center_x) - 60,
+                                  static_cast<int>(bottom->center_y) - 45, 48, 35);
+      fail_unless(count_pixels(after(order_box), green_lo, green_hi) > 80, "%s: no #1", format);
+      fail_unless(count_pixels(after(no_order_box), green_lo, green_hi) < 10,
+                  "%s: a pick order on the covered box", format);
+    }
+    gst_buffer_unref(original);
+    gst_buffer_unref(out);
+    gst_harness_teardown(h);
+  }
+}
+GST_END_TEST;
+
 static Suite* pickdetect_suite(void) {
   Suite* s = suite_create("pickdetect");
   TCase* tc = tcase_create("element");
@@ -706,6 +1064,10 @@ static Suite* pickdetect_suite(void) {
   tcase_add_test(tc, test_draw_colours);
   tcase_add_test(tc, test_meta_through_videoscale_videoconvert);
   tcase_add_test(tc, test_model_swap_while_playing);
+  tcase_add_test(tc, test_look_alike_models);
+  tcase_add_test(tc, test_add_remove_model_while_playing);
+  tcase_add_test(tc, test_model_set_file);
+  tcase_add_test(tc, test_pickable_and_covered);
   return s;
 }
 
