@@ -301,6 +301,27 @@ TEST(Metrics, OverallIsAMicroAverage) {
   EXPECT_DOUBLE_EQ(*s.overall().ms_per_frame, 10.0);
 }
 
+// All models in one element: a detection of a model that is not in the scene is a false
+// detection, even where an instance of another model lies; the frame's time is one figure.
+TEST(Metrics, AllModelsAtOnce) {
+  Dataset ds = one_model(100, 100, {});
+  ModelInfo other = ds.models[0];
+  other.name = "other";
+  ds.models.push_back(other);
+  ds.scenes[0].instances = {truth("box", rect(0, 0, 10, 10), 1.0)};
+  Scorer s(ds);
+  s.add_scene(0, {detection("box", rect(0, 0, 10, 10)), detection("other", rect(0, 0, 10, 10))});
+  s.add_frame_time(0, 7.0);
+  EXPECT_EQ(s.model_summary("box").tp, 1);
+  EXPECT_EQ(s.model_summary("other").fp, 1);
+  EXPECT_FALSE(s.model_summary("other").object_recall); // Nothing of it to find.
+  EXPECT_DOUBLE_EQ(*s.overall().object_precision, 0.5);
+  EXPECT_DOUBLE_EQ(*s.overall().object_recall, 1.0);
+  EXPECT_FALSE(s.model_summary("box").ms_per_frame);
+  EXPECT_DOUBLE_EQ(*s.overall().ms_per_frame, 7.0);
+  EXPECT_THROW(s.add_frame_time(1, 1.0), FormatError);
+}
+
 TEST(Dataset, ErrorsNameTheFileAndTheField) {
   const std::string good_model =
       R"("models": {"box": {"image": "m.png", "principal_points": [[5, 5]],
@@ -356,6 +377,14 @@ TEST(Dataset, DetectionsRoundTrip) {
   EXPECT_EQ(back[0].image, "scenes/a.png");
   EXPECT_EQ(back[0].method, "voting");
   EXPECT_DOUBLE_EQ(back[0].ms.at("box"), 12.5);
+  EXPECT_FALSE(back[0].frame_ms);
+  s.ms.clear();
+  s.frame_ms = 30.25;
+  const std::vector<SceneDetections> joint = parse_detections(detections_line(s), "mem");
+  ASSERT_EQ(joint.size(), 1u);
+  EXPECT_TRUE(joint[0].ms.empty());
+  ASSERT_TRUE(joint[0].frame_ms);
+  EXPECT_DOUBLE_EQ(*joint[0].frame_ms, 30.25);
   ASSERT_EQ(back[0].instances.size(), 1u);
   EXPECT_EQ(back[0].instances[0].matches, 17);
   EXPECT_TRUE(back[0].instances[0].pickable);

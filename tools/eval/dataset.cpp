@@ -356,6 +356,8 @@ std::vector<SceneDetections> parse_detections(const std::string& text, const std
       }
       g_list_free(names);
     }
+    if (JsonNode* n = Reader::member(root, "frame_ms"))
+      scene.frame_ms = r.number(n, "frame_ms");
     JsonArray* instances = r.array(r.required(root, "instances", ""), "instances");
     for (guint i = 0; i < json_array_get_length(instances); ++i)
       scene.instances.push_back(parse_detected(r, json_array_get_element(instances, i),
@@ -386,6 +388,10 @@ std::string detections_line(const SceneDetections& scene) {
       json_builder_add_double_value(b.get(), ms);
     }
     json_builder_end_object(b.get());
+  }
+  if (scene.frame_ms) {
+    json_builder_set_member_name(b.get(), "frame_ms");
+    json_builder_add_double_value(b.get(), *scene.frame_ms);
   }
   json_builder_set_member_name(b.get(), "instances");
   json_builder_begin_array(b.get());

@@ -76,8 +76,12 @@ struct DetectedInstance {
 struct SceneDetections {
   std::string image;
   std::string method; ///< Optional "method" key (empty when absent).
-  /// Optional "ms" key: milliseconds the element took on this frame, per model.
+  /// Optional "ms" key: milliseconds the element took on this frame, per model (one element
+  /// per model, pickdetect-eval --per-model).
   std::map<std::string, double> ms;
+  /// Optional "frame_ms" key: milliseconds the element took on this frame with all its models
+  /// loaded at once (pickdetect-eval's default).
+  std::optional<double> frame_ms;
   std::vector<DetectedInstance> instances;
 };
 

@@ -270,6 +270,12 @@ void Scorer::add_time(size_t scene_index, const std::string& model, double ms) {
   frame_ms_[scene_index] += ms;
 }
 
+void Scorer::add_frame_time(size_t scene_index, double ms) {
+  if (scene_index >= dataset_.scenes.size())
+    throw FormatError("scene " + std::to_string(scene_index) + " is not in the dataset");
+  frame_ms_[scene_index] += ms;
+}
+
 Summary Scorer::model_summary(const std::string& model) const {
   auto it = tallies_.find(model);
   return it == tallies_.end() ? Summary() : it->second.summary();
@@ -304,6 +310,8 @@ std::map<std::string, Scorer> score_detections(const Dataset& dataset,
     s.add_scene(it->second, line.instances);
     for (const auto& [model, ms] : line.ms)
       s.add_time(it->second, model, ms);
+    if (line.frame_ms)
+      s.add_frame_time(it->second, *line.frame_ms);
   }
   // Scenes without a line were seen by the method and nothing was found there.
   for (auto& [method, scorer] : scorers)
@@ -395,7 +403,7 @@ std::string report_table(const Dataset& dataset, const std::map<std::string, Sco
   for (const auto& r : rows)
     line(r);
   out << "\nobj/pix/pick P and R in %, centre (mean), c p95 and points (mean) in pixels, "
-         "ms/frame the median.\n";
+         "ms/frame the median (per model only when each model ran alone, --per-model).\n";
   return out.str();
 }
 

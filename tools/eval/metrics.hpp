@@ -14,8 +14,10 @@
 //    detections flagged pickable there, safe when paired (required or don't care) with an
 //    instance whose covered < 0.02; unpaired ones are unsafe.
 //  - A ratio whose denominator is 0 is undefined (JSON null, "-" in tables).
-//  - ms_per_frame: per model, the median over frames of that model's time; overall, the median
-//    over frames of the time summed over the models (the cost of finding every model in a frame).
+//  - ms_per_frame: per model, the median over frames of that model's time (one element per
+//    model); overall, the median over frames of the frame's time: the time of the element that
+//    had every model loaded at once plus any per-model times (the cost of finding every model in
+//    a frame). With all models in one element there is no per-model time (null).
 #pragma once
 
 #include "dataset.hpp"
@@ -82,6 +84,8 @@ public:
   void add_scene(size_t scene_index, const std::vector<DetectedInstance>& detected);
   /// Records how long the model's element took on the scene's frame.
   void add_time(size_t scene_index, const std::string& model, double ms);
+  /// Records how long the element with all the models loaded at once took on the frame.
+  void add_frame_time(size_t scene_index, double ms);
 
   Summary model_summary(const std::string& model) const;
   Summary overall() const;

@@ -5,9 +5,10 @@
 //   pickdetect-eval --method voting --json --detections-out voting.jsonl DATASET_DIR
 //   pickdetect-eval --score detections.jsonl DATASET_DIR     (scores a file, runs nothing)
 //
-// Every scene goes through the real element (appsrc ! pickdetect ! appsink), once per method
-// and per model, and the instances are read back from the buffers' metadata. The plugin is
-// found through GST_PLUGIN_PATH; a binary run from its build tree also looks in the build
+// Every scene goes through the real element (appsrc ! pickdetect ! appsink) once per method,
+// with all the dataset's models loaded at once as a user would (or, with --per-model, once per
+// model with that model alone), and the instances are read back from the buffers' metadata. The
+// plugin is found through GST_PLUGIN_PATH; a binary run from its build tree also looks in the build
 // tree's gst/ folder first.
 #include "dataset.hpp"
 #include "metrics.hpp"
@@ -16,6 +17,7 @@
 #include <glib/gstdio.h>
 #include <gst/gst.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -91,6 +93,8 @@ struct Options {
   gchar* score = nullptr;
   gboolean json = FALSE;
   gboolean bgr = FALSE;
+  gboolean per_model = FALSE;
+  gchar* models = nullptr;
   gchar* ratio = nullptr;
   gchar* bandwidth = nullptr;
   gchar* min_matches = nullptr;
@@ -103,6 +107,7 @@ struct Options {
     g_free(method);
     g_free(detections_out);
     g_free(score);
+    g_free(models);
     g_free(ratio);
     g_free(bandwidth);
     g_free(min_matches);
@@ -123,6 +128,13 @@ int run(int argc, char** argv) {
       {"json", 'j', 0, G_OPTION_ARG_NONE, &o.json,
        "Print the summary as JSON (per method: overall and per model)", nullptr},
       {"bgr", 0, 0, G_OPTION_ARG_NONE, &o.bgr, "Push BGR frames instead of GRAY8", nullptr},
+      {"per-model", 0, 0, G_OPTION_ARG_NONE, &o.per_model,
+       "One element per model, each with that model alone (default: one element with all the "
+       "models)",
+       nullptr},
+      {"models", 0, 0, G_OPTION_ARG_STRING, &o.models,
+       "Load and score only these of the dataset's models (comma-separated names; default: all)",
+       "NAME,..."},
       {"score", 0, 0, G_OPTION_ARG_FILENAME, &o.score,
        "Score this detections file (JSON Lines) instead of running the element", "FILE"},
       {"ratio", 0, 0, G_OPTION_ARG_STRING, &o.ratio, "Element property ratio", "R"},
@@ -140,9 +152,11 @@ int run(int argc, char** argv) {
 
   GOptionContext* context = g_option_context_new(nullptr);
   g_option_context_set_summary(
-      context, "Runs every scene of an annotated dataset (see the benchmark's FORMAT.md) through "
-               "the pickdetect element\nonce per method and model, and prints object, pixel, "
-               "centre and pick figures per model and overall.");
+      context,
+      "Runs every scene of an annotated dataset (see the benchmark's FORMAT.md) through the "
+      "pickdetect element\nonce per method, with all the dataset's models loaded at once (every "
+      "detection counts: one\nof a model that is not in the scene is a false detection), and "
+      "prints object, pixel, centre\nand pick figures per model and overall.");
   g_option_context_add_main_entries(context, entries, nullptr);
   g_option_context_add_group(context, gst_init_get_option_group());
   GError* error = nullptr;
@@ -200,6 +214,33 @@ int run(int argc, char** argv) {
   const Dataset dataset = load_dataset(o.rest[0]);
   std::map<std::string, Scorer> scorers;
 
+  // The models to load and score, in the dataset's order.
+  std::vector<const ModelInfo*> models;
+  if (o.models) {
+    gchar** names = g_strsplit(o.models, ",", -1);
+    for (gchar** n = names; *n; ++n) {
+      const std::string name(g_strstrip(*n));
+      const ModelInfo* m = dataset.find_model(name);
+      if (!m) {
+        std::cerr << "pickdetect-eval: --models: '" << name << "' is not one of the dataset's "
+                  << "models\n";
+        g_strfreev(names);
+        return 2;
+      }
+      if (std::find(models.begin(), models.end(), m) == models.end())
+        models.push_back(m);
+    }
+    g_strfreev(names);
+    if (o.score) {
+      std::cerr << "pickdetect-eval: --models applies to running the element, not to --score\n";
+      return 2;
+    }
+    std::sort(models.begin(), models.end()); // Pointers into dataset.models: its order.
+  } else {
+    for (const ModelInfo& m : dataset.models)
+      models.push_back(&m);
+  }
+
   if (o.score) {
     const std::vector<SceneDetections> lines = load_detections(o.score);
     scorers = score_detections(dataset, lines);
@@ -215,9 +256,9 @@ int run(int argc, char** argv) {
     g_free(tmp);
     std::map<std::string, std::string> model_files;
     std::vector<std::string> written;
-    for (const ModelInfo& m : dataset.models) {
-      model_files[m.name] = write_model_file(dataset, m, folder);
-      written.push_back(model_files[m.name]);
+    for (size_t k = 0; k < models.size(); ++k) {
+      model_files[models[k]->name] = write_model_file(dataset, *models[k], folder);
+      written.push_back(model_files[models[k]->name]);
     }
     auto cleanup = [&] {
       for (const std::string& f : written)
@@ -225,9 +266,18 @@ int run(int argc, char** argv) {
       g_rmdir(folder.c_str());
     };
 
+    // Each run is one element: all the models at once, or (--per-model) one model alone.
+    std::vector<std::vector<const ModelInfo*>> runs;
+    if (o.per_model) {
+      for (const ModelInfo* m : models)
+        runs.push_back({m});
+    } else {
+      runs.push_back(models);
+    }
+
     // method -> scene -> detections of every model.
     std::map<std::string, std::vector<SceneDetections>> lines;
-    Progress progress(methods.size() * dataset.models.size() * frames.size());
+    Progress progress(methods.size() * runs.size() * frames.size());
     try {
       for (const std::string& method : methods) {
         Scorer& scorer = scorers.try_emplace(method, dataset).first->second;
@@ -237,29 +287,46 @@ int run(int argc, char** argv) {
           out[i].image = frames[i].image;
           out[i].method = methods.size() > 1 ? method : std::string();
         }
-        for (const ModelInfo& m : dataset.models) {
-          std::vector<std::pair<std::string, std::string>> props = {{"model", model_files[m.name]},
+        for (const std::vector<const ModelInfo*>& run : runs) {
+          std::string model_list, label;
+          for (const ModelInfo* m : run) {
+            const std::string& file = model_files[m->name];
+            if (file.find(',') != std::string::npos)
+              throw RunError("the model file '" + file +
+                             "' has a comma in its path, which the element's model list cannot "
+                             "take (set TMPDIR to a folder without one)");
+            model_list += (model_list.empty() ? "" : ",") + file;
+            label += (label.empty() ? "" : "+") + m->name;
+          }
+          std::vector<std::pair<std::string, std::string>> props = {{"model", model_list},
                                                                     {"method", method}};
           props.insert(props.end(), properties.begin(), properties.end());
           ElementRunner runner(props);
           for (size_t i = 0; i < frames.size(); ++i) {
             FrameResult r = runner.process(frames[i]);
-            std::vector<DetectedInstance> mine;
-            for (DetectedInstance& d : r.instances) {
-              if (d.model != m.name)
+            for (const DetectedInstance& d : r.instances) {
+              if (std::none_of(run.begin(), run.end(),
+                               [&](const ModelInfo* m) { return m->name == d.model; }))
                 throw RunError("scene '" + frames[i].image +
                                "': the element named an instance's model '" + d.model +
-                               "', expected '" + m.name + "'");
+                               "', which is not among the models loaded (" + label + ")");
               if (d.polygon.size() < 3 || d.points.empty())
                 throw RunError("scene '" + frames[i].image +
                                "': an instance in the metadata has no outline or no centre");
-              mine.push_back(std::move(d));
             }
-            scorer.add_scene(i, mine, m.name);
-            scorer.add_time(i, m.name, r.ms);
-            out[i].ms[m.name] = r.ms;
-            out[i].instances.insert(out[i].instances.end(), mine.begin(), mine.end());
-            progress.step(method + " / " + m.name);
+            // Every detection counts against every loaded model: one of a model that is not in
+            // the scene is a false detection.
+            for (const ModelInfo* m : run)
+              scorer.add_scene(i, r.instances, m->name);
+            if (o.per_model) {
+              scorer.add_time(i, run[0]->name, r.ms);
+              out[i].ms[run[0]->name] = r.ms;
+            } else {
+              scorer.add_frame_time(i, r.ms);
+              out[i].frame_ms = r.ms;
+            }
+            out[i].instances.insert(out[i].instances.end(), r.instances.begin(), r.instances.end());
+            progress.step(method + " / " + label);
           }
         }
       }

@@ -16,8 +16,8 @@ exact polygon areas (Sutherland-Hodgman clipping against convex regions, fan tri
 non-convex pairs, shoelace areas; a self-crossing outline scored as its convex hull), greedy matching by descending IoU with ties to the earlier
 detection then the earlier instance, don't-care instances matched like others but counted
 neither way, linear-interpolated percentiles, pick figures only over scenes where every instance
-has "covered", undefined ratios as null, ms_per_frame the median (overall: of the per-frame sum
-over models).
+has "covered", undefined ratios as null, ms_per_frame the median (overall: of the per-frame
+time, "frame_ms" plus the sum of "ms" over models).
 """
 
 import argparse
@@ -266,6 +266,7 @@ def load_detections(path):
             lines.append({"image": need(doc, "image", "", origin),
                           "method": doc.get("method", ""),
                           "ms": {k: float(v) for k, v in doc.get("ms", {}).items()},
+                          "frame_ms": float(doc["frame_ms"]) if "frame_ms" in doc else None,
                           "instances": insts})
     return lines
 
@@ -385,12 +386,14 @@ def score(ds, lines, only_method=None):
         tallies = {m: new_tally() for m in ds["model_order"]}
         frame_ms = {}
         for si, scene in enumerate(ds["scenes"]):
-            line = by_scene.get(si, {"instances": [], "ms": {}})
+            line = by_scene.get(si, {"instances": [], "ms": {}, "frame_ms": None})
             for m in ds["model_order"]:
                 score_scene(tallies[m], scene, line["instances"], m)
             for m, ms in line["ms"].items():
                 tallies[m]["ms"].append(ms)
                 frame_ms[si] = frame_ms.get(si, 0.0) + ms
+            if line["frame_ms"] is not None:
+                frame_ms[si] = frame_ms.get(si, 0.0) + line["frame_ms"]
         pooled = new_tally()
         for t in tallies.values():
             for k, v in t.items():
