@@ -391,7 +391,7 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
   Detection result;
   result.scene_keypoints = static_cast<int>(scene.keypoints.size());
   auto t = Clock::now();
-  const std::vector<Match> matches = matcher_.match(scene.descriptors, s.ratio);
+  const std::vector<Match> matches = matcher_.match(scene.descriptors, s.ratio, s.search);
   result.matches = static_cast<int>(matches.size());
   result.timings.matching_ms = ms_since(t);
 

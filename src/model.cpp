@@ -35,6 +35,10 @@ void require_readable(const std::string& path, const char* what) {
   std::error_code ec;
   if (fs::is_directory(path, ec))
     throw Error(std::string(what) + " " + in_quotes(path) + " is a directory, not a file");
+  // A FIFO would block the open below until a writer comes; a device may never end.
+  if (fs::exists(path, ec) && !fs::is_regular_file(path, ec))
+    throw Error(std::string(what) + " " + in_quotes(path) +
+                " is not a regular file (a FIFO, socket or device)");
   std::ifstream probe(path, std::ios::binary);
   if (!probe) {
     const int err = errno;

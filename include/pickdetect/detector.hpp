@@ -32,6 +32,7 @@ struct Settings {
   int max_instances = 0;   ///< At most this many instances per frame, best first; 0 = no limit.
   bool allow_scale = true; ///< Votes use the keypoints' scale ratio (else scale is fixed at 1).
   bool refine = true;      ///< Refit each instance's pose on its own inlier matches.
+  Search search = Search::KdTree;      ///< Nearest-neighbour search of the matching.
   double ransac_reprojection_px = 5.0; ///< RANSAC baselines: inlier distance in scene pixels.
 };
 

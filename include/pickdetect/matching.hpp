@@ -6,13 +6,25 @@
 
 #include <opencv2/core.hpp>
 
+#include <memory>
 #include <vector>
 
+namespace cv::flann {
+class Index;
+}
+
 namespace pickdetect {
+
+/// How the two nearest model descriptors of each scene descriptor are searched.
+enum class Search {
+  KdTree,     ///< FLANN's randomised kd-trees, built with a fixed seed: fast, deterministic.
+  BruteForce, ///< Every pair compared: exact, several times slower on large frames.
+};
 
 /// Matches scene descriptors against the descriptors of every model at once: the two nearest
 /// neighbours of a scene descriptor are searched over all models together, so a scene feature
 /// that fits two models about equally well fails the ratio test and decides for neither.
+/// Immutable once built; copies share the search index.
 class Matcher {
 public:
   Matcher() = default;
@@ -20,7 +32,8 @@ public:
 
   /// Matches with the 2NN ratio test: nearest / second nearest distance below `ratio`.
   /// The result is ordered by scene keypoint and does not depend on threads or timing.
-  std::vector<Match> match(const cv::Mat& scene_descriptors, double ratio) const;
+  std::vector<Match> match(const cv::Mat& scene_descriptors, double ratio,
+                           Search search = Search::KdTree) const;
 
   bool empty() const { return descriptors_.empty(); }
 
@@ -28,6 +41,7 @@ private:
   cv::Mat descriptors_;     ///< All models' descriptors, stacked.
   std::vector<int> owner_;  ///< Row -> model index.
   std::vector<int> offset_; ///< Model index -> first row.
+  std::shared_ptr<cv::flann::Index> index_;
 };
 
 } // namespace pickdetect

@@ -14,9 +14,10 @@ namespace pickdetect {
 /// overlapping (absorbs the pose noise of two instances that only touch).
 constexpr double kOverlapTolerance = 0.005;
 /// An instance counts as covered when the instances on top of it hide more than this share of
-/// its outline. A sliver this thin under another object's edge does not hold it down; the
-/// benchmark calls anything under 2 % safe, and outlines are precise to about 0.1 % of area.
-constexpr double kCoverTolerance = 0.015;
+/// its outline: a sliver that thin under another object's edge does not hold it down. Kept well
+/// under the benchmark's 2 % safety line, because what truly lies on an object also includes
+/// what no outline shows (shadows, undetected objects), measured at up to 1 % more.
+constexpr double kCoverTolerance = 0.01;
 /// An instance is pickable only when at least this share of its outline is seen.
 constexpr double kMinPickableVisibility = 0.5;
 

@@ -145,3 +145,24 @@ TEST(Features, KeypointsSitWhereTheBlobIs) {
   EXPECT_NEAR(best->pt.x, 80.f, 0.1f);
   EXPECT_NEAR(best->pt.y, 90.f, 0.1f);
 }
+
+TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
+  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  const cv::Mat box =
+      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/box.png", cv::IMREAD_GRAYSCALE);
+  cv::Mat scene = test_scene::plain_background({800, 600});
+  test_scene::paste(scene, box, {{{250.f, 250.f}, 30.0, 1.0}, {{560.f, 360.f}, 200.0, 0.9}});
+  const Features f = extract_features(scene);
+  const Matcher matcher({model});
+  const std::vector<Match> exact = matcher.match(f.descriptors, 0.8, Search::BruteForce);
+  const std::vector<Match> fast = matcher.match(f.descriptors, 0.8, Search::KdTree);
+  ASSERT_GT(exact.size(), 100u);
+  size_t shared = 0;
+  for (const Match& e : exact)
+    shared += std::any_of(fast.begin(), fast.end(), [&](const Match& k) {
+      return k.scene_point == e.scene_point && k.model_point == e.model_point;
+    });
+  EXPECT_GE(shared, exact.size() * 9 / 10)
+      << shared << " of " << exact.size() << " exact matches kept";
+  EXPECT_EQ(fast.size(), matcher.match(f.descriptors, 0.8, Search::KdTree).size());
+}

@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
   gdouble bandwidth = pickdetect::Settings().bandwidth;
   gint min_matches = pickdetect::Settings().min_matches;
   gint max_instances = pickdetect::Settings().max_instances;
-  gboolean no_scale = FALSE, no_refine = FALSE, json = FALSE;
+  gboolean no_scale = FALSE, no_refine = FALSE, json = FALSE, exact = FALSE;
   const GOptionEntry entries[] = {
       {"model", 'm', 0, G_OPTION_ARG_FILENAME_ARRAY, &models,
        "Model file (.yml) or model picture; repeat for several models", "FILE"},
@@ -86,6 +86,8 @@ int main(int argc, char** argv) {
        "Assume the objects are at the model's scale (the paper's assumption)", nullptr},
       {"no-refine", 0, 0, G_OPTION_ARG_NONE, &no_refine,
        "Keep the paper's pose from the principal points' modes (no refit on inliers)", nullptr},
+      {"exact", 0, 0, G_OPTION_ARG_NONE, &exact,
+       "Match by brute force (exact) instead of FLANN kd-trees", nullptr},
       {"json", 0, 0, G_OPTION_ARG_NONE, &json,
        "Print one JSON line per picture (the benchmark's detections format) instead of text",
        nullptr},
@@ -128,6 +130,7 @@ int main(int argc, char** argv) {
     s.max_instances = max_instances;
     s.allow_scale = !no_scale;
     s.refine = !no_refine;
+    s.search = exact ? pickdetect::Search::BruteForce : pickdetect::Search::KdTree;
 
     std::vector<pickdetect::Model> loaded;
     for (gchar** m = models; *m; ++m)
@@ -147,10 +150,12 @@ int main(int argc, char** argv) {
         print_json(argv[a], d.instances);
         continue;
       }
-      std::printf("%s: %zu instance(s), %d keypoints, %d matches, %.0f ms (%s)\n", argv[a],
-                  d.instances.size(), d.scene_keypoints, d.matches,
+      std::printf("%s: %zu instance(s), %d keypoints, %d matches, %.0f ms (%s; features %.0f, "
+                  "matching %.0f, voting and the rest %.0f)\n",
+                  argv[a], d.instances.size(), d.scene_keypoints, d.matches,
                   d.timings.features_ms + d.timings.matching_ms + d.timings.clustering_ms,
-                  pickdetect::method_name(s.method));
+                  pickdetect::method_name(s.method), d.timings.features_ms, d.timings.matching_ms,
+                  d.timings.clustering_ms);
       for (const pickdetect::Instance& inst : d.instances) {
         std::printf("  %s centre=(%.1f, %.1f) angle=%.1f scale=%.3f matches=%d score=%.2f "
                     "pickable=%s points=",
