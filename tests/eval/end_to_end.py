@@ -3,9 +3,11 @@
 """End to end: pickdetect-synth makes a tiny dataset, pickdetect-eval runs it through the real
 pickdetect element, and score.py rescoring its --detections-out agrees with its --json.
 
-    end_to_end.py PICKDETECT_SYNTH PICKDETECT_EVAL SCORE_PY MODEL_PICTURE
+    end_to_end.py PICKDETECT_SYNTH PICKDETECT_EVAL SCORE_PY MODEL_PICTURE [SECOND_PICTURE]
 
-Also checks that a dataset with a broken field is refused with the file and field named.
+Also checks that a dataset with a broken field is refused with the file and field named. With
+a second picture, a two-product dataset runs with both models in one element (the default),
+with --per-model and with --models.
 """
 import json
 import os
@@ -32,6 +34,60 @@ def close(a, b):
     return abs(a - b) <= 1e-6
 
 
+def agree(voting, again):
+    bad = [("overall", k) for k in KEYS if not close(voting["overall"][k], again["overall"][k])]
+    for model in voting["models"]:
+        bad += [(model, k) for k in KEYS
+                if not close(voting["models"][model][k], again["models"][model][k])]
+    assert not bad, "pickdetect-eval and score.py disagree on %s" % bad
+
+
+def two_products(synth, tool, score, pictures, tmp):
+    data = os.path.join(tmp, "mixed")
+    run([synth, "--scenes", "2", "--size", "800x600", "--instances", "3-3", "--scale", "0.5-0.6",
+         "--tilt", "0", "--kind", "conveyor", "--distractors", "0", "--seed", "4", "--format",
+         "png", "--mixed-products", "--out", data] + pictures)
+    models = sorted(json.load(open(os.path.join(data, "dataset.json")))["models"])
+    assert len(models) == 2, models
+
+    # Default: one element with both models; one time per frame, none per model.
+    det = os.path.join(tmp, "mixed.jsonl")
+    report = json.loads(run([tool, "--method", "voting", "--json", "--detections-out", det,
+                             data]).stdout)["methods"]["voting"]
+    print("both models in one element:", json.dumps(report["overall"]))
+    assert sorted(report["models"]) == models
+    assert report["overall"]["tp"] >= 4, report["overall"]
+    for m in models:
+        assert report["models"][m]["tp"] >= 1, (m, report["models"][m])
+        assert report["models"][m]["ms_per_frame"] is None, report["models"][m]
+    assert report["overall"]["ms_per_frame"] > 0
+    lines = [json.loads(l) for l in open(det)]
+    assert all("frame_ms" in l and "ms" not in l for l in lines), lines
+    assert {i["model"] for l in lines for i in l["instances"]} == set(models)
+    agree(report, json.loads(run([sys.executable, score, data, det]).stdout)["methods"]
+          ["detections"])
+
+    # --per-model: one element per model, a time per model.
+    det = os.path.join(tmp, "per-model.jsonl")
+    per = json.loads(run([tool, "--method", "voting", "--per-model", "--json",
+                          "--detections-out", det, data]).stdout)["methods"]["voting"]
+    for m in models:
+        assert per["models"][m]["ms_per_frame"] > 0, per["models"][m]
+    lines = [json.loads(l) for l in open(det)]
+    assert all(sorted(l["ms"]) == models and "frame_ms" not in l for l in lines), lines
+    agree(per, json.loads(run([sys.executable, score, data, det]).stdout)["methods"]
+          ["detections"])
+
+    # --models: only that model is loaded and scored.
+    only = json.loads(run([tool, "--method", "voting", "--models", models[0], "--json",
+                           data]).stdout)["methods"]["voting"]
+    assert only["models"][models[1]]["tp"] == 0 and only["models"][models[1]]["fp"] == 0
+    assert only["models"][models[1]]["object_recall"] is None
+    assert only["overall"]["tp"] == only["models"][models[0]]["tp"] >= 1, only
+    err = run([tool, "--models", "nothing", data], expect=2).stderr
+    assert "'nothing' is not one of the dataset's models" in err, err
+
+
 def main():
     synth, tool, score, picture = sys.argv[1:5]
     tmp = tempfile.mkdtemp(prefix="pickdetect-e2e-")
@@ -55,13 +111,7 @@ def main():
         assert [l["image"] for l in lines] == ["scenes/0000.png", "scenes/0001.png"], lines
         rescored = json.loads(run([sys.executable, score, data, det]).stdout)
         # One method: the lines carry no "method" key and score.py names the set "detections".
-        again = rescored["methods"]["detections"]
-        bad = [(scope, k) for scope in ["overall"] for k in KEYS
-               if not close(voting[scope][k], again[scope][k])]
-        for model in voting["models"]:
-            bad += [(model, k) for k in KEYS
-                    if not close(voting["models"][model][k], again["models"][model][k])]
-        assert not bad, "pickdetect-eval and score.py disagree on %s" % bad
+        agree(voting, rescored["methods"]["detections"])
 
         # A broken dataset is refused, naming the file and the field.
         broken = os.path.join(tmp, "broken")
@@ -71,6 +121,9 @@ def main():
         json.dump(doc, open(os.path.join(broken, "dataset.json"), "w"))
         err = run([tool, "--method", "voting", broken], expect=1).stderr
         assert "dataset.json: scenes[1].width" in err, err
+
+        if len(sys.argv) > 5:
+            two_products(synth, tool, score, [picture, sys.argv[5]], tmp)
         print("ok")
         return 0
     finally:
