@@ -87,6 +87,7 @@ void place(Instance& inst, const Model& model, const cv::Matx33d& h) {
 /// What every method shares for one model: its matches, the keypoints on both sides and votes.
 struct ModelScene {
   const Model& model;
+  const std::vector<cv::KeyPoint>& model_keypoints;
   int index;
   const std::vector<cv::KeyPoint>& scene_keypoints;
   std::vector<Match> matches;
@@ -146,7 +147,7 @@ std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, bool a
     if (claimed[i])
       continue;
     const Match& m = ms.matches[i];
-    const cv::Point2f predicted = pose.apply(ms.model.keypoints[m.model_point].pt);
+    const cv::Point2f predicted = pose.apply(ms.model_keypoints[m.model_point].pt);
     const cv::Point2f seen = ms.scene_keypoints[m.scene_point].pt;
     if (std::hypot(predicted.x - seen.x, predicted.y - seen.y) > tol)
       continue;
@@ -169,7 +170,7 @@ std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_
   for (int round = 0; round < kRefineRounds && in.size() >= 2; ++round) {
     std::vector<cv::Point2f> from, to;
     for (int i : in) {
-      from.push_back(ms.model.keypoints[ms.matches[i].model_point].pt);
+      from.push_back(ms.model_keypoints[ms.matches[i].model_point].pt);
       to.push_back(ms.scene_keypoints[ms.matches[i].scene_point].pt);
     }
     Similarity next;
@@ -192,7 +193,7 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
                         const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h) {
   if (in.size() < kMinPerspectiveMatches)
     return false;
-  auto model_point = [&](int i) { return ms.model.keypoints[ms.matches[i].model_point].pt; };
+  auto model_point = [&](int i) { return ms.model_keypoints[ms.matches[i].model_point].pt; };
   auto scene_point = [&](int i) { return ms.scene_keypoints[ms.matches[i].scene_point].pt; };
   {
     std::vector<cv::Point2f> spread, hull;
@@ -315,7 +316,7 @@ std::vector<Instance> detect_ransac(ModelScene& ms, const Settings& s, bool clus
   }
   for (const std::vector<int>& g : groups) {
     HomographyFit fit;
-    if (!fit_homography_ransac(subset(ms.matches, g), ms.model.keypoints, ms.scene_keypoints,
+    if (!fit_homography_ransac(subset(ms.matches, g), ms.model_keypoints, ms.scene_keypoints,
                                s.ransac_reprojection_px, s.min_matches, fit))
       continue;
     Instance inst;
@@ -360,11 +361,13 @@ Detector::Detector(std::vector<Model> models) : models_(std::move(models)) {
   if (models_.empty())
     throw Error("a detector needs at least one model");
   for (const Model& m : models_)
-    if (m.keypoints.empty() || m.descriptors.rows != static_cast<int>(m.keypoints.size()) ||
+    if (m.sift.keypoints.empty() ||
+        m.sift.descriptors.rows != static_cast<int>(m.sift.keypoints.size()) ||
         m.principal_points.empty() || m.outline.size() < 3)
       throw Error("model '" + m.name +
                   "' is incomplete (no features, principal points or outline)");
-  matcher_ = Matcher(models_);
+  sift_matcher_ = Matcher(models_, FeatureKind::Sift);
+  orb_matcher_ = Matcher(models_, FeatureKind::Orb);
 }
 
 Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const {
@@ -374,7 +377,7 @@ Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const 
   if (grey.cols < kMinFrameSide || grey.rows < kMinFrameSide)
     return result;
   const auto t0 = Clock::now();
-  const Features scene = extract_features(grey);
+  const Features scene = extract_features_scaled(grey, settings.detection_scale, settings.features);
   const double features_ms = ms_since(t0);
   result = detect_scene(scene, grey.size(), settings, grey);
   result.timings.features_ms = features_ms;
@@ -391,19 +394,26 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
   Detection result;
   result.scene_keypoints = static_cast<int>(scene.keypoints.size());
   auto t = Clock::now();
-  const std::vector<Match> matches = matcher_.match(scene.descriptors, s.ratio, s.search);
+  const std::vector<Match> matches = (s.features == FeatureKind::Orb ? orb_matcher_ : sift_matcher_)
+                                         .match(scene.descriptors, s.ratio, s.search);
   result.matches = static_cast<int>(matches.size());
   result.timings.matching_ms = ms_since(t);
 
   t = Clock::now();
   for (size_t m = 0; m < models_.size(); ++m) {
-    ModelScene ms{models_[m], static_cast<int>(m), scene.keypoints, {}, {}, 0.0};
+    ModelScene ms{models_[m],
+                  models_[m].features(s.features).keypoints,
+                  static_cast<int>(m),
+                  scene.keypoints,
+                  {},
+                  {},
+                  0.0};
     for (const Match& match : matches)
       if (match.model == static_cast<int>(m))
         ms.matches.push_back(match);
     if (static_cast<int>(ms.matches.size()) < std::max(1, s.min_matches))
       continue;
-    ms.votes = cast_votes(ms.matches, ms.model.keypoints, scene.keypoints,
+    ms.votes = cast_votes(ms.matches, ms.model_keypoints, scene.keypoints,
                           ms.model.principal_points, s.allow_scale);
     ms.bandwidth = s.bandwidth > 0.0 ? s.bandwidth : kAutoBandwidthShare * model_side(ms.model);
 
@@ -441,7 +451,7 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
                    });
   if (s.max_instances > 0 && static_cast<int>(result.instances.size()) > s.max_instances)
     result.instances.resize(s.max_instances);
-  assess_occlusion(result.instances, models_, frame_size, grey);
+  assess_occlusion(result.instances, models_, frame_size, grey, s.features);
   result.timings.clustering_ms = ms_since(t);
   return result;
 }

@@ -2,7 +2,12 @@
 // Feature extraction: SIFT keypoints and descriptors.
 #include <pickdetect/features.hpp>
 
+#include <pickdetect/error.hpp>
+
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
 
 namespace pickdetect {
 namespace {
@@ -14,19 +19,73 @@ namespace {
 /// was found; this takes it back.
 constexpr float kSiftPositionBias = 0.25f;
 
+/// ORB: at most this many keypoints per picture, on this many pyramid levels this far apart.
+/// The levels reach down to a third of the picture's size, so a model meets its instances from
+/// about 0.35 to 2.8 times its size.
+constexpr int kOrbFeatures = 3000;
+constexpr int kOrbLevels = 8;
+constexpr float kOrbLevelStep = 1.2f;
+/// FAST threshold: low enough for dark, low-contrast objects (the default, 20, misses them).
+constexpr int kOrbFastThreshold = 10;
+
+Features orb_features(const cv::Mat& grey, const cv::Mat& mask) {
+  Features f;
+  cv::Ptr<cv::ORB> orb = cv::ORB::create(kOrbFeatures, kOrbLevelStep, kOrbLevels, 31, 0, 2,
+                                         cv::ORB::HARRIS_SCORE, 31, kOrbFastThreshold);
+  orb->detectAndCompute(grey, mask, f.keypoints, f.descriptors);
+  // ORB finds level-L keypoints on the picture shrunk by s = 1.2^L (pixel centres aligned, as
+  // cv::resize does) and reports them as position * s; pixel x of the level lies at
+  // (x + 0.5) * s - 0.5 in the picture.
+  for (cv::KeyPoint& k : f.keypoints) {
+    const float s = std::pow(kOrbLevelStep, static_cast<float>(k.octave));
+    k.pt += cv::Point2f(0.5f * (s - 1.f), 0.5f * (s - 1.f));
+  }
+  return f;
+}
+
 } // namespace
 
-Features extract_features(const cv::Mat& grey, const cv::Mat& mask) {
+const char* feature_name(FeatureKind kind) {
+  return kind == FeatureKind::Orb ? "orb" : "sift";
+}
+
+FeatureKind parse_features(const std::string& name) {
+  for (FeatureKind k : {FeatureKind::Sift, FeatureKind::Orb})
+    if (name == feature_name(k))
+      return k;
+  throw Error("unknown features '" + name + "' (expected sift or orb)");
+}
+
+Features extract_features(const cv::Mat& grey, const cv::Mat& mask, FeatureKind kind) {
   CV_Assert(grey.type() == CV_8UC1);
   Features f;
   if (grey.empty())
     return f;
+  if (kind == FeatureKind::Orb)
+    return orb_features(grey, mask);
   // One detector per call: cv::SIFT keeps no state between calls, and per-call objects keep
   // concurrent callers apart. Its keypoints come out sorted, so the order is deterministic.
   cv::Ptr<cv::SIFT> sift = cv::SIFT::create();
   sift->detectAndCompute(grey, mask, f.keypoints, f.descriptors);
   for (cv::KeyPoint& k : f.keypoints)
     k.pt -= cv::Point2f(kSiftPositionBias, kSiftPositionBias);
+  return f;
+}
+
+Features extract_features_scaled(const cv::Mat& grey, double scale, FeatureKind kind) {
+  if (!(scale > 0.0) || scale >= 1.0)
+    return extract_features(grey, cv::Mat(), kind);
+  cv::Mat small;
+  cv::resize(grey, small, cv::Size(), scale, scale, cv::INTER_AREA);
+  Features f = extract_features(small, cv::Mat(), kind);
+  // cv::resize aligns pixel centres: small pixel x covers grey's (x + 0.5) / fx - 0.5.
+  const double fx = static_cast<double>(small.cols) / grey.cols;
+  const double fy = static_cast<double>(small.rows) / grey.rows;
+  for (cv::KeyPoint& k : f.keypoints) {
+    k.pt = cv::Point2f(static_cast<float>((k.pt.x + 0.5) / fx - 0.5),
+                       static_cast<float>((k.pt.y + 0.5) / fy - 0.5));
+    k.size = static_cast<float>(k.size / scale);
+  }
   return f;
 }
 

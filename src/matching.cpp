@@ -27,17 +27,18 @@ std::mutex& flann_build_lock() {
 
 } // namespace
 
-Matcher::Matcher(const std::vector<Model>& models) {
+Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kind) {
   std::vector<cv::Mat> parts;
   for (size_t m = 0; m < models.size(); ++m) {
+    const cv::Mat& d = models[m].features(kind).descriptors;
     offset_.push_back(static_cast<int>(owner_.size()));
-    owner_.insert(owner_.end(), models[m].descriptors.rows, static_cast<int>(m));
-    if (!models[m].descriptors.empty())
-      parts.push_back(models[m].descriptors);
+    owner_.insert(owner_.end(), d.rows, static_cast<int>(m));
+    if (!d.empty())
+      parts.push_back(d);
   }
   if (!parts.empty())
     cv::vconcat(parts, descriptors_);
-  if (descriptors_.rows >= 2) {
+  if (kind == FeatureKind::Sift && descriptors_.rows >= 2) {
     std::lock_guard<std::mutex> hold(flann_build_lock());
     cvflann::seed_random(kKdSeed);
     index_ = std::make_shared<cv::flann::Index>(
@@ -48,12 +49,14 @@ Matcher::Matcher(const std::vector<Model>& models) {
 std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio,
                                   Search search) const {
   std::vector<Match> matches;
-  if (descriptors_.rows < 2 || scene_descriptors.empty())
+  if (descriptors_.rows < 2 || scene_descriptors.empty() ||
+      scene_descriptors.type() != descriptors_.type() ||
+      scene_descriptors.cols != descriptors_.cols)
     return matches;
   const int n = scene_descriptors.rows;
   // Nearest two per scene row: indices and distances (squared L2 from FLANN).
   cv::Mat indices(n, 2, CV_32S), distances(n, 2, CV_32F);
-  if (search == Search::KdTree && index_) {
+  if (kind_ == FeatureKind::Sift && search == Search::KdTree && index_) {
     cv::parallel_for_(cv::Range(0, (n + kSearchBlock - 1) / kSearchBlock), [&](const cv::Range& r) {
       for (int b = r.start; b < r.end; ++b) {
         const cv::Range rows(b * kSearchBlock, std::min(n, (b + 1) * kSearchBlock));
@@ -64,7 +67,7 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
     });
     cv::sqrt(distances, distances);
   } else {
-    cv::BFMatcher bf(cv::NORM_L2);
+    cv::BFMatcher bf(kind_ == FeatureKind::Orb ? cv::NORM_HAMMING : cv::NORM_L2);
     std::vector<std::vector<cv::DMatch>> knn;
     bf.knnMatch(scene_descriptors, descriptors_, knn, 2);
     for (int i = 0; i < n; ++i) {

@@ -176,13 +176,13 @@ void check_geometry(const Model& model, const std::string& origin) {
 } // namespace
 
 void compute_model_features(Model& model) {
-  Features f = extract_features(model.image, model.mask);
+  Features f = extract_features(model.image, model.mask, FeatureKind::Sift);
   if (static_cast<int>(f.keypoints.size()) < kMinModelKeypoints)
     throw Error("model picture " + in_quotes(model.image_path) + " yields only " +
                 std::to_string(f.keypoints.size()) + " SIFT keypoints (at least " +
                 std::to_string(kMinModelKeypoints) + " are needed): it has too little texture");
-  model.keypoints = std::move(f.keypoints);
-  model.descriptors = std::move(f.descriptors);
+  model.sift = std::move(f);
+  model.orb = extract_features(model.image, model.mask, FeatureKind::Orb);
 }
 
 Model model_from_picture(const std::string& picture_path, const std::string& name) {
@@ -248,18 +248,28 @@ Model load_model(const std::string& path) {
     check_geometry(model, origin);
 
     if (!root["keypoints"].empty() && !root["descriptors"].empty()) {
-      cv::read(root["keypoints"], model.keypoints);
-      root["descriptors"] >> model.descriptors;
-      if (model.descriptors.type() != CV_32F ||
-          model.descriptors.rows != static_cast<int>(model.keypoints.size()) ||
-          model.descriptors.cols != 128)
+      Features& sift = model.sift;
+      cv::read(root["keypoints"], sift.keypoints);
+      root["descriptors"] >> sift.descriptors;
+      if (sift.descriptors.type() != CV_32F ||
+          sift.descriptors.rows != static_cast<int>(sift.keypoints.size()) ||
+          sift.descriptors.cols != 128)
         throw Error(origin + ": the cached keypoints and descriptors do not agree (" +
-                    std::to_string(model.keypoints.size()) + " keypoints, " +
-                    std::to_string(model.descriptors.rows) + "x" +
-                    std::to_string(model.descriptors.cols) + " descriptors)");
-      if (static_cast<int>(model.keypoints.size()) < kMinModelKeypoints)
-        throw Error(origin + ": the cache holds only " + std::to_string(model.keypoints.size()) +
+                    std::to_string(sift.keypoints.size()) + " keypoints, " +
+                    std::to_string(sift.descriptors.rows) + "x" +
+                    std::to_string(sift.descriptors.cols) + " descriptors)");
+      if (static_cast<int>(sift.keypoints.size()) < kMinModelKeypoints)
+        throw Error(origin + ": the cache holds only " + std::to_string(sift.keypoints.size()) +
                     " keypoints (at least " + std::to_string(kMinModelKeypoints) + " are needed)");
+      if (!root["orb_keypoints"].empty() && !root["orb_descriptors"].empty()) {
+        cv::read(root["orb_keypoints"], model.orb.keypoints);
+        root["orb_descriptors"] >> model.orb.descriptors;
+        if (model.orb.descriptors.rows != static_cast<int>(model.orb.keypoints.size()) ||
+            (!model.orb.descriptors.empty() && model.orb.descriptors.type() != CV_8U))
+          throw Error(origin + ": the cached ORB keypoints and descriptors do not agree");
+      } else {
+        model.orb = extract_features(model.image, model.mask, FeatureKind::Orb);
+      }
     } else {
       try {
         compute_model_features(model);
@@ -298,9 +308,11 @@ void save_model(const Model& model, const std::string& path, bool cache_features
   write_points("principal_points", model.principal_points);
   write_points("outline", model.outline);
   store << "grasp_point" << model.grasp_point;
-  if (cache_features && !model.keypoints.empty()) {
-    cv::write(store, "keypoints", model.keypoints);
-    store << "descriptors" << model.descriptors;
+  if (cache_features && !model.sift.keypoints.empty()) {
+    cv::write(store, "keypoints", model.sift.keypoints);
+    store << "descriptors" << model.sift.descriptors;
+    cv::write(store, "orb_keypoints", model.orb.keypoints);
+    store << "orb_descriptors" << model.orb.descriptors;
   }
 }
 

@@ -50,8 +50,8 @@ int count_inside(const std::vector<cv::Point2f>& points, const std::vector<cv::P
 }
 
 /// Share of the model's keypoints lying in `region` (scene pixels) that the instance kept.
-double kept_share(const Instance& inst, const Model& model, const std::vector<cv::Point2f>& region,
-                  int& kept) {
+double kept_share(const Instance& inst, const Features& model,
+                  const std::vector<cv::Point2f>& region, int& kept) {
   kept = count_inside(inst.support, region);
   std::vector<cv::Point2f> in_model;
   cv::perspectiveTransform(region, in_model, cv::Mat(inst.homography.inv()));
@@ -99,13 +99,13 @@ double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Poi
 }
 
 int which_on_top(const Instance& a, const Model& model_a, const Instance& b, const Model& model_b,
-                 const cv::Mat& grey) {
+                 const cv::Mat& grey, FeatureKind kind) {
   const std::vector<cv::Point2f> region = shared_area(a, b);
   if (region.size() < 3)
     return 0;
   int kept_a = 0, kept_b = 0;
-  const double share_a = kept_share(a, model_a, region, kept_a);
-  const double share_b = kept_share(b, model_b, region, kept_b);
+  const double share_a = kept_share(a, model_a.features(kind), region, kept_a);
+  const double share_b = kept_share(b, model_b.features(kind), region, kept_b);
   if (kept_a >= kMinTopFeatures && share_a >= kTopFeatureDominance * share_b)
     return +1;
   if (kept_b >= kMinTopFeatures && share_b >= kTopFeatureDominance * share_a)
@@ -131,7 +131,7 @@ int which_on_top(const Instance& a, const Model& model_a, const Instance& b, con
 }
 
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
-                      const cv::Size& frame_size, const cv::Mat& grey) {
+                      const cv::Size& frame_size, const cv::Mat& grey, FeatureKind kind) {
   const size_t n = instances.size();
   // above[i]: the instances lying on instance i; hidden[i]: the area they hide, in pixels.
   std::vector<std::vector<size_t>> above(n);
@@ -147,7 +147,7 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
       if (shared <= kOverlapTolerance * std::min(area[i], area[j]))
         continue;
       const int top = which_on_top(instances[i], models[instances[i].model], instances[j],
-                                   models[instances[j].model], grey);
+                                   models[instances[j].model], grey, kind);
       if (top >= 0) { // j is under i, or nobody can tell: then neither is safe to pick
         above[j].push_back(i);
         hidden[j] += shared;

@@ -3,18 +3,36 @@
 
 #include <opencv2/core.hpp>
 
+#include <string>
 #include <vector>
 
 namespace pickdetect {
 
-/// SIFT keypoints and their descriptors (CV_32F, one row per keypoint).
+/// Which local features describe pictures.
+enum class FeatureKind {
+  Sift, ///< SIFT (the paper's): the most distinctive, the most costly.
+  Orb,  ///< ORB: oriented FAST corners with binary descriptors, ten times cheaper or more.
+};
+
+const char* feature_name(FeatureKind kind);
+/// Parses "sift" or "orb"; throws Error on anything else.
+FeatureKind parse_features(const std::string& name);
+
+/// Keypoints and their descriptors, one row per keypoint: CV_32F for SIFT, CV_8U for ORB.
 struct Features {
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;
 };
 
-/// SIFT on a grey picture (CV_8UC1, any stride); an optional mask limits where keypoints lie.
-Features extract_features(const cv::Mat& grey, const cv::Mat& mask = cv::Mat());
+/// Features of a grey picture (CV_8UC1, any stride); an optional mask limits where keypoints
+/// lie. Positions are in the picture's pixels with pixel centres on integers.
+Features extract_features(const cv::Mat& grey, const cv::Mat& mask = cv::Mat(),
+                          FeatureKind kind = FeatureKind::Sift);
+
+/// Features of `grey` shrunk by `scale` (0 < scale <= 1, area interpolation), with positions and
+/// sizes carried back to `grey`'s pixels.
+Features extract_features_scaled(const cv::Mat& grey, double scale,
+                                 FeatureKind kind = FeatureKind::Sift);
 
 /// A correspondence between a model keypoint and a scene keypoint that passed the 2NN test.
 struct Match {

@@ -28,7 +28,9 @@ enum class Search {
 class Matcher {
 public:
   Matcher() = default;
-  explicit Matcher(const std::vector<Model>& models);
+  /// Matches against the models' features of the given kind. SIFT descriptors are searched
+  /// with a kd-tree or by brute force; ORB's binary ones by brute force (Hamming distance).
+  explicit Matcher(const std::vector<Model>& models, FeatureKind kind = FeatureKind::Sift);
 
   /// Matches with the 2NN ratio test: nearest / second nearest distance below `ratio`.
   /// The result is ordered by scene keypoint and does not depend on threads or timing.
@@ -38,6 +40,7 @@ public:
   bool empty() const { return descriptors_.empty(); }
 
 private:
+  FeatureKind kind_ = FeatureKind::Sift;
   cv::Mat descriptors_;     ///< All models' descriptors, stacked.
   std::vector<int> owner_;  ///< Row -> model index.
   std::vector<int> offset_; ///< Model index -> first row.

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #pragma once
 
+#include <pickdetect/features.hpp>
+
 #include <opencv2/core.hpp>
 
 #include <string>
@@ -20,8 +22,10 @@ struct Model {
   std::vector<cv::Point2f> principal_points;
   std::vector<cv::Point2f> outline; ///< Outline polygon in model pixels.
   int grasp_point = 0;              ///< Index into principal_points of the grasp point.
-  std::vector<cv::KeyPoint> keypoints;
-  cv::Mat descriptors; ///< CV_32F, one row per keypoint.
+  Features sift;                    ///< SIFT features of the picture (the paper's).
+  Features orb;                     ///< ORB features of the picture (the fast configuration).
+
+  const Features& features(FeatureKind kind) const { return kind == FeatureKind::Orb ? orb : sift; }
 };
 
 /// Fewest keypoints a model picture must yield to be usable.
@@ -42,7 +46,7 @@ Model load_model(const std::string& path);
 /// does not recompute them.
 void save_model(const Model& model, const std::string& path, bool cache_features = true);
 
-/// Computes the model's features from its picture and mask (used by the loaders).
+/// Computes the model's SIFT and ORB features from its picture and mask (used by the loaders).
 void compute_model_features(Model& model);
 
 } // namespace pickdetect

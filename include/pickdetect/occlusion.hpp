@@ -30,15 +30,17 @@ double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Poi
 /// area are compared with each model's picture carried there (normalised cross-correlation),
 /// when `grey` (the frame) is given.
 int which_on_top(const Instance& a, const Model& model_a, const Instance& b, const Model& model_b,
-                 const cv::Mat& grey = cv::Mat());
+                 const cv::Mat& grey = cv::Mat(), FeatureKind kind = FeatureKind::Sift);
 
 /// For every instance: `covered` (instances on it hide more than kCoverTolerance of its
 /// outline, counting those of which it cannot be told which one is on top),
 /// `visibility` (share of its outline inside the frame and under no instance on top of it),
 /// `pickable` (not covered, grasp point in the frame, visibility at least
 /// kMinPickableVisibility) and `pick_order` (1 = first, by score, among the pickable).
-/// `models` are indexed by Instance::model; `grey`, the frame, is optional.
+/// `models` are indexed by Instance::model; `grey`, the frame, is optional; `kind` names the
+/// features the instances were found with.
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
-                      const cv::Size& frame_size, const cv::Mat& grey = cv::Mat());
+                      const cv::Size& frame_size, const cv::Mat& grey = cv::Mat(),
+                      FeatureKind kind = FeatureKind::Sift);
 
 } // namespace pickdetect

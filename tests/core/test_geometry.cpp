@@ -99,7 +99,7 @@ TEST(Voting, SiftAnglesFollowTheSceneRotation) {
   const std::vector<Match> matches = Matcher({model}).match(f.descriptors, 0.7);
   ASSERT_GE(matches.size(), 20u);
   const std::vector<Vote> votes =
-      cast_votes(matches, model.keypoints, f.keypoints, model.principal_points, true);
+      cast_votes(matches, model.sift.keypoints, f.keypoints, model.principal_points, true);
   int near_truth = 0;
   for (const Vote& v : votes)
     near_truth += angle_difference(v.angle, 40.0) < 10.0 &&
@@ -113,11 +113,11 @@ TEST(Matcher, AFeatureThatFitsTwoModelsEquallyDecidesForNeither) {
   twin.name = "twin";
   const Features scene = [&] {
     Features f;
-    f.keypoints = a.keypoints;
-    f.descriptors = a.descriptors.clone();
+    f.keypoints = a.sift.keypoints;
+    f.descriptors = a.sift.descriptors.clone();
     return f;
   }();
-  EXPECT_GT(Matcher({a}).match(scene.descriptors, 0.8).size(), a.keypoints.size() / 2);
+  EXPECT_GT(Matcher({a}).match(scene.descriptors, 0.8).size(), a.sift.keypoints.size() / 2);
   EXPECT_TRUE(Matcher({a, twin}).match(scene.descriptors, 0.8).empty());
 }
 
@@ -165,4 +165,50 @@ TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
   EXPECT_GE(shared, exact.size() * 9 / 10)
       << shared << " of " << exact.size() << " exact matches kept";
   EXPECT_EQ(fast.size(), matcher.match(f.descriptors, 0.8, Search::KdTree).size());
+}
+
+TEST(Features, OrbAndReducedPicturesKeepPositionsInFramePixels) {
+  // The same blob as above, found by ORB and by SIFT on a picture shrunk by 0.5.
+  cv::Mat grey(240, 320, CV_8UC1);
+  for (int y = 0; y < grey.rows; ++y)
+    for (int x = 0; x < grey.cols; ++x)
+      grey.at<uchar>(y, x) = cv::saturate_cast<uchar>(
+          200.0 -
+          150.0 * std::exp(-((x - 160.0) * (x - 160.0) + (y - 120.0) * (y - 120.0)) / 200.0));
+  const Features half = extract_features_scaled(grey, 0.5);
+  ASSERT_FALSE(half.keypoints.empty());
+  const cv::KeyPoint* best = &half.keypoints[0];
+  for (const cv::KeyPoint& k : half.keypoints)
+    if (k.response > best->response)
+      best = &k;
+  EXPECT_NEAR(best->pt.x, 160.f, 0.25f);
+  EXPECT_NEAR(best->pt.y, 120.f, 0.25f);
+  EXPECT_EQ(parse_features("orb"), FeatureKind::Orb);
+  EXPECT_THROW(parse_features("surf"), Error);
+}
+
+TEST(Detector, OrbAndReducedDetectionFindTheBoxes) {
+  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  const Detector detector({model});
+  const cv::Mat box =
+      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/box.png", cv::IMREAD_GRAYSCALE);
+  cv::Mat scene = test_scene::plain_background({900, 700});
+  const std::vector<test_scene::Pose> poses = {{{250.f, 250.f}, 30.0, 1.0},
+                                               {{620.f, 430.f}, 200.0, 0.9}};
+  test_scene::paste(scene, box, poses);
+  Settings orb;
+  orb.features = FeatureKind::Orb;
+  Settings reduced;
+  reduced.detection_scale = 0.6;
+  for (const Settings& s : {orb, reduced}) {
+    const Detection d = detector.detect(scene, s);
+    ASSERT_EQ(d.instances.size(), 2u) << feature_name(s.features) << " at " << s.detection_scale;
+    for (const test_scene::Pose& p : poses) {
+      double best = 1e9;
+      for (const Instance& i : d.instances)
+        best = std::min(best, static_cast<double>(
+                                  std::hypot(i.center.x - p.center.x, i.center.y - p.center.y)));
+      EXPECT_LE(best, 1.5) << feature_name(s.features) << " at " << s.detection_scale;
+    }
+  }
 }

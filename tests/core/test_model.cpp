@@ -57,8 +57,8 @@ TEST(Model, PlainPictureGetsTheCentreAndCornersAndItsRectangle) {
   EXPECT_EQ(m.principal_points[3], cv::Point2f(324.f, 223.f));
   ASSERT_EQ(m.outline.size(), 4u);
   EXPECT_EQ(m.outline[2], cv::Point2f(324.f, 223.f));
-  EXPECT_GE(static_cast<int>(m.keypoints.size()), kMinModelKeypoints);
-  EXPECT_EQ(m.descriptors.rows, static_cast<int>(m.keypoints.size()));
+  EXPECT_GE(static_cast<int>(m.sift.keypoints.size()), kMinModelKeypoints);
+  EXPECT_EQ(m.sift.descriptors.rows, static_cast<int>(m.sift.keypoints.size()));
 }
 
 TEST_F(ModelFiles, AlphaMarksTheObjectAndGivesItsOutline) {
@@ -78,7 +78,7 @@ TEST_F(ModelFiles, AlphaMarksTheObjectAndGivesItsOutline) {
   EXPECT_NEAR(outline_box.y, 20, 1);
   EXPECT_NEAR(outline_box.width, box.cols, 2);
   EXPECT_EQ(cv::countNonZero(m.mask), box.cols * box.rows);
-  for (const cv::KeyPoint& k : m.keypoints)
+  for (const cv::KeyPoint& k : m.sift.keypoints)
     EXPECT_TRUE(cv::Rect(28, 18, box.cols + 4, box.rows + 4).contains(k.pt))
         << "keypoint outside the object at (" << k.pt.x << ", " << k.pt.y << ")";
 }
@@ -99,9 +99,9 @@ TEST_F(ModelFiles, ModelFileRoundTripsWithCachedFeatures) {
   EXPECT_EQ(back.principal_points, m.principal_points);
   EXPECT_EQ(back.outline, m.outline);
   EXPECT_EQ(back.grasp_point, 2);
-  ASSERT_EQ(back.keypoints.size(), m.keypoints.size());
-  EXPECT_EQ(cv::norm(back.descriptors, m.descriptors, cv::NORM_INF), 0.0);
-  EXPECT_EQ(back.keypoints[5].pt, m.keypoints[5].pt);
+  ASSERT_EQ(back.sift.keypoints.size(), m.sift.keypoints.size());
+  EXPECT_EQ(cv::norm(back.sift.descriptors, m.sift.descriptors, cv::NORM_INF), 0.0);
+  EXPECT_EQ(back.sift.keypoints[5].pt, m.sift.keypoints[5].pt);
 }
 
 TEST_F(ModelFiles, ModelFileWithoutCacheComputesFeatures) {
@@ -109,7 +109,7 @@ TEST_F(ModelFiles, ModelFileWithoutCacheComputesFeatures) {
   const Model m = load_model(file);
   EXPECT_EQ(m.name, "plain");
   EXPECT_EQ(m.principal_points.size(), 5u);
-  EXPECT_GE(static_cast<int>(m.keypoints.size()), kMinModelKeypoints);
+  EXPECT_GE(static_cast<int>(m.sift.keypoints.size()), kMinModelKeypoints);
 }
 
 TEST_F(ModelFiles, ErrorsNameTheFileAndTheReason) {

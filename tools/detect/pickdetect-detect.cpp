@@ -63,9 +63,11 @@ void print_json(const char* picture, const std::vector<pickdetect::Instance>& in
 int main(int argc, char** argv) {
   gchar** models = nullptr;
   gchar* method = nullptr;
+  gchar* features = nullptr;
   gchar* annotate = nullptr;
   gchar* save = nullptr;
   gdouble ratio = pickdetect::Settings().ratio;
+  gdouble detection_scale = pickdetect::Settings().detection_scale;
   gdouble bandwidth = pickdetect::Settings().bandwidth;
   gint min_matches = pickdetect::Settings().min_matches;
   gint max_instances = pickdetect::Settings().max_instances;
@@ -75,6 +77,10 @@ int main(int argc, char** argv) {
        "Model file (.yml) or model picture; repeat for several models", "FILE"},
       {"method", 0, 0, G_OPTION_ARG_STRING, &method,
        "voting (default), ransac-clustered or ransac-all", "NAME"},
+      {"features", 0, 0, G_OPTION_ARG_STRING, &features,
+       "sift (default, the paper's) or orb (fast)", "NAME"},
+      {"detection-scale", 0, 0, G_OPTION_ARG_DOUBLE, &detection_scale,
+       "Extract features from the picture shrunk by this factor (default 1)", "F"},
       {"ratio", 0, 0, G_OPTION_ARG_DOUBLE, &ratio, "2NN ratio test threshold (default 0.8)", "R"},
       {"min-matches", 0, 0, G_OPTION_ARG_INT, &min_matches,
        "Fewest matches an instance needs (default 6)", "N"},
@@ -110,6 +116,7 @@ int main(int argc, char** argv) {
   auto cleanup = [&] {
     g_strfreev(models);
     g_free(method);
+    g_free(features);
     g_free(annotate);
     g_free(save);
   };
@@ -124,7 +131,10 @@ int main(int argc, char** argv) {
     pickdetect::Settings s;
     if (method)
       s.method = pickdetect::parse_method(method);
+    if (features)
+      s.features = pickdetect::parse_features(features);
     s.ratio = ratio;
+    s.detection_scale = detection_scale;
     s.bandwidth = bandwidth;
     s.min_matches = min_matches;
     s.max_instances = max_instances;
