@@ -2,9 +2,12 @@
 // The paper's baselines: RANSAC homographies over a set of matches.
 #include <pickdetect/ransac.hpp>
 
+#include "model_scene.hpp"
+
 #include <opencv2/calib3d.hpp>
 
 #include <cmath>
+#include <numeric>
 
 namespace pickdetect {
 namespace {
@@ -45,4 +48,43 @@ bool fit_homography_ransac(const std::vector<Match>& matches,
   return static_cast<int>(out.inliers.size()) >= std::max(4, min_inliers);
 }
 
+namespace detail {
+namespace {
+
+std::vector<Match> subset(const std::vector<Match>& all, const std::vector<int>& idx) {
+  std::vector<Match> out;
+  out.reserve(idx.size());
+  for (int i : idx)
+    out.push_back(all[i]);
+  return out;
+}
+
+} // namespace
+
+std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bool clustered) {
+  std::vector<Instance> found;
+  std::vector<std::vector<int>> groups;
+  if (clustered) {
+    for (const Cluster& c : centre_clusters(ms))
+      groups.push_back(c.members);
+  } else {
+    groups.emplace_back(ms.matches.size());
+    std::iota(groups.back().begin(), groups.back().end(), 0);
+  }
+  for (const std::vector<int>& g : groups) {
+    HomographyFit fit;
+    if (!fit_homography_ransac(subset(ms.matches, g), ms.model_keypoints, ms.scene_keypoints,
+                               s.ransac_reprojection_px, s.min_matches, fit))
+      continue;
+    Instance inst;
+    place(inst, ms.model, fit.homography);
+    inst.matches = static_cast<int>(fit.inliers.size());
+    for (int k : fit.inliers)
+      inst.support.push_back(ms.scene_keypoints[ms.matches[g[k]].scene_point].pt);
+    found.push_back(std::move(inst));
+  }
+  return found;
+}
+
+} // namespace detail
 } // namespace pickdetect

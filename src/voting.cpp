@@ -3,6 +3,9 @@
 // (and scaling) given by its two keypoints.
 #include <pickdetect/voting.hpp>
 
+#include "model_scene.hpp"
+
+#include <algorithm>
 #include <cmath>
 
 namespace pickdetect {
@@ -36,4 +39,79 @@ std::vector<Vote> cast_votes(const std::vector<Match>& matches,
   return votes;
 }
 
+namespace detail {
+namespace {
+
+/// The paper's step 3-5: per principal point, the mode of the cluster's votes; then the
+/// similarity that best carries the model's principal points onto those modes.
+bool pose_from_principal_points(const ModelScene& ms, const std::vector<int>& members,
+                                bool allow_scale, Similarity& pose) {
+  const size_t n_points = ms.model.principal_points.size();
+  std::vector<cv::Point2f> modes(n_points);
+  std::vector<cv::Point2f> estimates(members.size());
+  for (size_t j = 0; j < n_points; ++j) {
+    cv::Point2d sum(0, 0);
+    for (size_t k = 0; k < members.size(); ++k) {
+      estimates[k] = ms.votes[members[k]].points[j];
+      sum += cv::Point2d(estimates[k].x, estimates[k].y);
+    }
+    const cv::Point2f mean(static_cast<float>(sum.x / members.size()),
+                           static_cast<float>(sum.y / members.size()));
+    modes[j] = mean_shift_mode(estimates, mean, ms.bandwidth);
+  }
+  if (n_points >= 2)
+    return fit_similarity(ms.model.principal_points, modes, allow_scale, pose);
+  // A single principal point fixes the position only: take the votes' median rotation/scale.
+  std::vector<float> angles, scales;
+  for (int i : members) {
+    angles.push_back(ms.votes[i].angle);
+    scales.push_back(ms.votes[i].scale);
+  }
+  std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
+  std::nth_element(scales.begin(), scales.begin() + scales.size() / 2, scales.end());
+  pose.angle = angles[angles.size() / 2];
+  pose.scale = scales[scales.size() / 2];
+  const cv::Point2f at =
+      Similarity{pose.angle, pose.scale, {0, 0}}.apply(ms.model.principal_points[0]);
+  pose.translation = cv::Point2d(modes[0].x - at.x, modes[0].y - at.y);
+  return true;
+}
+
+} // namespace
+
+std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
+  std::vector<Instance> found;
+  std::vector<char> claimed(ms.matches.size(), 0);
+  for (const Cluster& c : centre_clusters(ms)) {
+    if (static_cast<int>(c.members.size()) < s.min_matches)
+      break; // clusters come strongest first
+    Similarity pose;
+    if (!pose_from_principal_points(ms, c.members, s.allow_scale, pose))
+      continue;
+    Instance inst;
+    inst.matches = static_cast<int>(c.members.size());
+    place(inst, ms.model, pose);
+    if (s.refine) {
+      std::vector<int> in = refine_pose(ms, pose, s.allow_scale, claimed);
+      if (static_cast<int>(in.size()) < s.min_matches)
+        continue;
+      cv::Matx33d h;
+      // Without allow_scale the objects keep the model's size: the pose stays rigid.
+      if (s.allow_scale && refine_perspective(ms, pose, s.allow_scale, claimed, in, h))
+        place(inst, ms.model, h);
+      else
+        place(inst, ms.model, pose);
+      for (int i : in)
+        claimed[i] = 1;
+      inst.matches = static_cast<int>(in.size());
+      inst.support = scene_points(ms, in);
+    } else {
+      inst.support = scene_points(ms, c.members);
+    }
+    found.push_back(std::move(inst));
+  }
+  return found;
+}
+
+} // namespace detail
 } // namespace pickdetect

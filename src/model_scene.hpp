@@ -1,0 +1,55 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Internal to the core: one model's view of a frame, shared by the voting method, the RANSAC
+// baselines and the pose refinement.
+#pragma once
+
+#include <pickdetect/detector.hpp>
+#include <pickdetect/meanshift.hpp>
+#include <pickdetect/pose.hpp>
+#include <pickdetect/voting.hpp>
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace pickdetect::detail {
+
+/// What every method shares for one model: its matches, the keypoints on both sides and votes.
+struct ModelScene {
+  const Model& model;
+  const std::vector<cv::KeyPoint>& model_keypoints;
+  int index;
+  const std::vector<cv::KeyPoint>& scene_keypoints;
+  std::vector<Match> matches;
+  std::vector<Vote> votes;
+  double bandwidth = 0.0;
+};
+
+/// The model's smaller side (of its outline's bounding box), in model pixels.
+double model_side(const Model& model);
+
+/// Fills an instance's geometry (points, outline, centre, angle, scale, homography) from a
+/// similarity pose or from a homography.
+void place(Instance& inst, const Model& model, const Similarity& pose);
+void place(Instance& inst, const Model& model, const cv::Matx33d& h);
+
+/// Scene positions of the given matches' scene keypoints.
+std::vector<cv::Point2f> scene_points(const ModelScene& ms, const std::vector<int>& idx);
+
+/// Mean-shift clusters of the centre votes, strongest first.
+std::vector<Cluster> centre_clusters(const ModelScene& ms);
+
+/// The voting method (voting.cpp) and the RANSAC baselines (ransac.cpp) on one model.
+std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s);
+std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bool clustered);
+
+/// Refinement (refine.cpp): refits a similarity pose on its own inlier matches (those not yet
+/// `claimed` by a stronger instance) until they settle; returns the inliers.
+std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,
+                             const std::vector<char>& claimed);
+/// Homography fitted by least squares on the inliers of a similarity pose, kept when it is well
+/// supported and stays close to the similarity; `in` becomes its own inlier set.
+bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow_scale,
+                        const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h);
+
+} // namespace pickdetect::detail

@@ -1,0 +1,152 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Refinement beyond the paper: each instance's pose refitted on its own inlier matches, and a
+// homography where enough well-spread inliers allow it (objects tilted out of the plane).
+#include "model_scene.hpp"
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace pickdetect::detail {
+namespace {
+
+/// Refinement: a match is an inlier of a pose when its scene keypoint lies within this share of
+/// the model's smaller side (at least kMinInlierPx) of where the pose puts its model keypoint...
+constexpr double kInlierShare = 0.02;
+constexpr double kMinInlierPx = 3.0;
+/// ...its orientation agrees with the pose's within this many degrees...
+constexpr double kInlierAngleDeg = 30.0;
+/// ...and, with allow_scale, its size ratio lies within this factor of the pose's scale.
+constexpr double kInlierScaleFactor = 1.5;
+constexpr int kRefineRounds = 4;
+/// Perspective refinement (objects tilted a little out of the picture plane): a homography is
+/// fitted on an instance's inliers when there are this many...
+constexpr size_t kMinPerspectiveMatches = 16;
+/// ...and their model points span this share of the outline's area (no collinear few, the
+/// paper's objection to homographies)...
+constexpr double kMinPerspectiveSpread = 0.2;
+/// ...and it is kept only if no outline point moves farther than this share of the model's
+/// smaller side from where the similarity puts it.
+constexpr double kMaxPerspectiveShift = 0.15;
+
+/// Matches (indices into ms.matches, not yet claimed) consistent with a pose.
+std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, bool allow_scale,
+                            const std::vector<char>& claimed) {
+  const double tol = std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * pose.scale);
+  std::vector<int> in;
+  for (size_t i = 0; i < ms.matches.size(); ++i) {
+    if (claimed[i])
+      continue;
+    const Match& m = ms.matches[i];
+    const cv::Point2f predicted = pose.apply(ms.model_keypoints[m.model_point].pt);
+    const cv::Point2f seen = ms.scene_keypoints[m.scene_point].pt;
+    if (std::hypot(predicted.x - seen.x, predicted.y - seen.y) > tol)
+      continue;
+    if (angle_difference(ms.votes[i].angle, pose.angle) > kInlierAngleDeg)
+      continue;
+    if (allow_scale) {
+      const double r = ms.votes[i].scale / pose.scale;
+      if (r > kInlierScaleFactor || r < 1.0 / kInlierScaleFactor)
+        continue;
+    }
+    in.push_back(static_cast<int>(i));
+  }
+  return in;
+}
+
+} // namespace
+
+/// Refits the pose on its own inlier matches until the inlier set settles.
+std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,
+                             const std::vector<char>& claimed) {
+  std::vector<int> in = inliers_of(ms, pose, allow_scale, claimed);
+  for (int round = 0; round < kRefineRounds && in.size() >= 2; ++round) {
+    std::vector<cv::Point2f> from, to;
+    for (int i : in) {
+      from.push_back(ms.model_keypoints[ms.matches[i].model_point].pt);
+      to.push_back(ms.scene_keypoints[ms.matches[i].scene_point].pt);
+    }
+    Similarity next;
+    if (!fit_similarity(from, to, allow_scale, next))
+      break;
+    std::vector<int> again = inliers_of(ms, next, allow_scale, claimed);
+    if (again.size() < 2)
+      break;
+    pose = next;
+    if (again == in)
+      break;
+    in = std::move(again);
+  }
+  return in;
+}
+
+/// Homography fitted by least squares on the inliers of a similarity pose, kept when it is well
+/// supported and stays close to the similarity; `in` becomes its own inlier set.
+bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow_scale,
+                        const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h) {
+  if (in.size() < kMinPerspectiveMatches)
+    return false;
+  auto model_point = [&](int i) { return ms.model_keypoints[ms.matches[i].model_point].pt; };
+  auto scene_point = [&](int i) { return ms.scene_keypoints[ms.matches[i].scene_point].pt; };
+  {
+    std::vector<cv::Point2f> spread, hull;
+    for (int i : in)
+      spread.push_back(model_point(i));
+    cv::convexHull(spread, hull);
+    if (cv::contourArea(hull) < kMinPerspectiveSpread * std::abs(cv::contourArea(ms.model.outline)))
+      return false;
+  }
+  const double side = model_side(ms.model) * pose.scale;
+  const double tol = std::max(kMinInlierPx, kInlierShare * side);
+  const std::vector<cv::Point2f> similar = pose.apply(ms.model.outline);
+  std::vector<int> current = in;
+  bool found = false;
+  for (int round = 0; round < kRefineRounds; ++round) {
+    std::vector<cv::Point2f> from, to;
+    for (int i : current) {
+      from.push_back(model_point(i));
+      to.push_back(scene_point(i));
+    }
+    const cv::Mat fit = cv::findHomography(from, to, 0);
+    if (fit.empty() || !cv::checkRange(fit))
+      break;
+    const cv::Matx33d candidate(fit);
+    std::vector<cv::Point2f> outline;
+    cv::perspectiveTransform(ms.model.outline, outline, fit);
+    bool close = true;
+    for (size_t k = 0; k < outline.size() && close; ++k)
+      close = cv::norm(outline[k] - similar[k]) <= kMaxPerspectiveShift * side;
+    if (!close)
+      break;
+    std::vector<int> again;
+    std::vector<cv::Point2f> predicted;
+    for (size_t i = 0; i < ms.matches.size(); ++i) {
+      if (claimed[i])
+        continue;
+      const Vote& v = ms.votes[i];
+      if (angle_difference(v.angle, pose.angle) > kInlierAngleDeg)
+        continue;
+      if (allow_scale && (v.scale / pose.scale > kInlierScaleFactor ||
+                          v.scale / pose.scale < 1.0 / kInlierScaleFactor))
+        continue;
+      cv::perspectiveTransform(std::vector<cv::Point2f>{model_point(static_cast<int>(i))},
+                               predicted, fit);
+      if (cv::norm(predicted[0] - scene_point(static_cast<int>(i))) <= tol)
+        again.push_back(static_cast<int>(i));
+    }
+    if (again.size() < kMinPerspectiveMatches)
+      break;
+    h = candidate;
+    found = true;
+    if (again == current)
+      break;
+    current = std::move(again);
+  }
+  if (found)
+    in = std::move(current);
+  return found;
+}
+
+} // namespace pickdetect::detail
