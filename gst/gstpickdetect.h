@@ -21,6 +21,19 @@ typedef enum {
 #define GST_TYPE_PICK_DETECT_METHOD (gst_pick_detect_method_get_type())
 GType gst_pick_detect_method_get_type(void);
 
+/**
+ * GstPickDetectFeatures:
+ * @GST_PICK_DETECT_FEATURES_SIFT: SIFT (the paper's): the most distinctive, the most costly
+ * @GST_PICK_DETECT_FEATURES_ORB: ORB: oriented FAST corners, binary descriptors, much cheaper
+ */
+typedef enum {
+  GST_PICK_DETECT_FEATURES_SIFT,
+  GST_PICK_DETECT_FEATURES_ORB,
+} GstPickDetectFeatures;
+
+#define GST_TYPE_PICK_DETECT_FEATURES (gst_pick_detect_features_get_type())
+GType gst_pick_detect_features_get_type(void);
+
 #define GST_TYPE_PICK_DETECT (gst_pick_detect_get_type())
 G_DECLARE_FINAL_TYPE(GstPickDetect, gst_pick_detect, GST, PICK_DETECT, GstVideoFilter)
 
