@@ -4,6 +4,7 @@
 //   pickdetect-eval DATASET_DIR
 //   pickdetect-eval --method voting --json --detections-out voting.jsonl DATASET_DIR
 //   pickdetect-eval --score detections.jsonl DATASET_DIR     (scores a file, runs nothing)
+//   pickdetect-eval --frame-scale 0.5 DATASET_DIR   (frames and truth shrunk: 1280x960 -> 640x480)
 //
 // Every scene goes through the real element (appsrc ! pickdetect ! appsink) once per method,
 // with all the dataset's models loaded at once as a user would (or, with --per-model, once per
@@ -14,10 +15,14 @@
 #include "metrics.hpp"
 #include "runner.hpp"
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include <glib/gstdio.h>
 #include <gst/gst.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -94,6 +99,7 @@ struct Options {
   gboolean json = FALSE;
   gboolean bgr = FALSE;
   gboolean per_model = FALSE;
+  gdouble frame_scale = 1.0;
   gchar* models = nullptr;
   gchar* ratio = nullptr;
   gchar* bandwidth = nullptr;
@@ -118,6 +124,41 @@ struct Options {
   }
 };
 
+/// Resizes every frame by `scale` (area interpolation) and carries the dataset's truth with it:
+/// pixel centres aligned as cv::resize does, x' = (x + 0.5) * fx - 0.5 with fx = new width /
+/// old width (and alike in y), sizes rounded to whole pixels.
+void scale_frames(Dataset& dataset, std::vector<Frame>* frames, double scale) {
+  for (size_t i = 0; i < dataset.scenes.size(); ++i) {
+    Scene& scene = dataset.scenes[i];
+    const int width = std::max(1, static_cast<int>(std::lround(scene.width * scale)));
+    const int height = std::max(1, static_cast<int>(std::lround(scene.height * scale)));
+    const double fx = static_cast<double>(width) / scene.width;
+    const double fy = static_cast<double>(height) / scene.height;
+    auto map = [fx, fy](Point& p) {
+      p.x = (p.x + 0.5) * fx - 0.5;
+      p.y = (p.y + 0.5) * fy - 0.5;
+    };
+    for (TrueInstance& t : scene.instances) {
+      std::for_each(t.points.begin(), t.points.end(), map);
+      std::for_each(t.polygon.begin(), t.polygon.end(), map);
+      if (t.scale)
+        *t.scale *= std::sqrt(fx * fy);
+    }
+    if (frames) {
+      Frame& f = (*frames)[i];
+      const int type = f.bgr ? CV_8UC3 : CV_8UC1;
+      const cv::Mat original(f.height, f.width, type, f.pixels.data());
+      cv::Mat resized;
+      cv::resize(original, resized, cv::Size(width, height), 0, 0, cv::INTER_AREA);
+      f.width = width;
+      f.height = height;
+      f.pixels.assign(resized.datastart, resized.dataend);
+    }
+    scene.width = width;
+    scene.height = height;
+  }
+}
+
 int run(int argc, char** argv) {
   Options o;
   const GOptionEntry entries[] = {
@@ -128,6 +169,10 @@ int run(int argc, char** argv) {
       {"json", 'j', 0, G_OPTION_ARG_NONE, &o.json,
        "Print the summary as JSON (per method: overall and per model)", nullptr},
       {"bgr", 0, 0, G_OPTION_ARG_NONE, &o.bgr, "Push BGR frames instead of GRAY8", nullptr},
+      {"frame-scale", 0, 0, G_OPTION_ARG_DOUBLE, &o.frame_scale,
+       "Resize every frame by F (area interpolation) before pushing it, and the ground truth "
+       "with it (0 < F <= 1; 0.5 makes 1280x960 scenes 640x480)",
+       "F"},
       {"per-model", 0, 0, G_OPTION_ARG_NONE, &o.per_model,
        "One element per model, each with that model alone (default: one element with all the "
        "models)",
@@ -172,6 +217,11 @@ int run(int argc, char** argv) {
     return 2;
   }
 
+  if (!(o.frame_scale > 0.0 && o.frame_scale <= 1.0)) {
+    std::cerr << "pickdetect-eval: --frame-scale wants 0 < F <= 1, got " << o.frame_scale << "\n";
+    return 2;
+  }
+
   std::vector<std::string> methods;
   if (o.method) {
     bool known = false;
@@ -211,7 +261,7 @@ int run(int argc, char** argv) {
     properties.emplace_back(name, value);
   }
 
-  const Dataset dataset = load_dataset(o.rest[0]);
+  Dataset dataset = load_dataset(o.rest[0]);
   std::map<std::string, Scorer> scorers;
 
   // The models to load and score, in the dataset's order.
@@ -243,9 +293,13 @@ int run(int argc, char** argv) {
 
   if (o.score) {
     const std::vector<SceneDetections> lines = load_detections(o.score);
+    if (o.frame_scale != 1.0)
+      scale_frames(dataset, nullptr, o.frame_scale);
     scorers = score_detections(dataset, lines);
   } else {
-    const std::vector<Frame> frames = load_frames(dataset, o.bgr);
+    std::vector<Frame> frames = load_frames(dataset, o.bgr);
+    if (o.frame_scale != 1.0)
+      scale_frames(dataset, &frames, o.frame_scale);
     gchar* tmp = g_dir_make_tmp("pickdetect-eval-XXXXXX", &error);
     if (!tmp) {
       std::cerr << "pickdetect-eval: " << error->message << "\n";
