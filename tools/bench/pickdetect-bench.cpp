@@ -1,0 +1,526 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// pickdetect-bench: time per frame of the pickdetect element in a real pipeline,
+//
+//   appsrc ! pickdetect draw=true ! fakesink sync=false
+//
+// at 640x480, 1280x960 and 1920x1080 with 3, 10 and 30 boxes in view, for each method, split by
+// stage (the element's bus message: features-ms, matching-ms, clustering-ms, metadata-ms,
+// overlay-ms; the whole frame from pad probes on the element's sink and src pads), beside the
+// bare cost of SIFT extraction (pickdetect::extract_features) on the same frames in the same run,
+// then the fast configurations (detection-scale, features=orb) at 640x480, and peak memory.
+//
+//   pickdetect-bench              full run (a few minutes on two cores)
+//   pickdetect-bench --quick      fewer frames and configurations (the meson benchmark)
+//   pickdetect-bench --json       the same figures as JSON
+//
+// Frames are GRAY8: OpenCV's box.png pasted N times at seeded random poses (overlaps allowed) on
+// noise, built in-process with tests/common/scene.hpp. The first frame of every run warms up
+// and is not counted.
+#include "common/scene.hpp"
+
+#include <pickdetect/features.hpp>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <gst/app/gstappsrc.h>
+#include <gst/gst.h>
+#include <gst/video/video.h>
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_between(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+struct Options {
+  gboolean quick = FALSE;
+  gboolean json = FALSE;
+  gint frames = 0; ///< Counted frames per run; 0 = 15 (4 with --quick).
+  gchar* data = nullptr;
+  ~Options() { g_free(data); }
+};
+
+struct Resolution {
+  int width, height;
+  double box_scale; ///< Box size in the frame / box.png's, so that 30 boxes fit (overlapping).
+};
+
+/// One run of the element.
+struct Config {
+  Resolution res;
+  int count = 0;
+  std::string method = "voting";
+  std::string features = "sift";
+  double detection_scale = 1.0;
+  bool fast = false; ///< Part of the fast-configuration table.
+
+  std::string name() const {
+    std::ostringstream s;
+    s << features;
+    if (detection_scale != 1.0)
+      s << " @" << detection_scale;
+    return s.str();
+  }
+};
+
+/// Median and spread (10th and 90th percentiles) of a sample.
+struct Stats {
+  double median = 0, p10 = 0, p90 = 0;
+};
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty())
+    return 0.0;
+  std::sort(v.begin(), v.end());
+  const double pos = q * static_cast<double>(v.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (pos - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+Stats stats(const std::vector<double>& v) {
+  return {percentile(v, 0.5), percentile(v, 0.1), percentile(v, 0.9)};
+}
+
+const char* const kStages[] = {"features", "matching", "clustering", "metadata", "overlay"};
+
+struct Result {
+  Config config;
+  std::vector<double> frame; ///< Whole frame inside the element (pad probes), ms.
+  std::map<std::string, std::vector<double>> stage;
+  std::vector<double> after_share; ///< (frame - features) / frame, per frame.
+  std::vector<double> found;       ///< Instances found per frame.
+};
+
+// ---- frames --------------------------------------------------------------------------------
+
+std::vector<cv::Mat> make_frames(const cv::Mat& box, const Resolution& res, int count, int n,
+                                 int seed) {
+  std::vector<cv::Mat> frames;
+  cv::RNG rng(static_cast<uint64>(seed));
+  const cv::Size size(res.width, res.height);
+  const float margin = static_cast<float>(0.3 * res.box_scale * box.rows);
+  for (int f = 0; f < n; f++) {
+    cv::Mat scene = pickdetect::test_scene::plain_background(size, 110, seed * 1000 + f);
+    std::vector<pickdetect::test_scene::Pose> poses;
+    for (int i = 0; i < count; i++)
+      poses.push_back({cv::Point2f(rng.uniform(margin, res.width - margin),
+                                   rng.uniform(margin, res.height - margin)),
+                       rng.uniform(0.0, 360.0), res.box_scale * rng.uniform(0.9, 1.1)});
+    pickdetect::test_scene::paste(scene, box, poses);
+    frames.push_back(scene);
+  }
+  return frames;
+}
+
+// ---- the element ---------------------------------------------------------------------------
+
+struct Probes {
+  std::mutex lock;
+  Clock::time_point entered;
+  std::vector<double> frame_ms;
+};
+
+GstPadProbeReturn on_enter(GstPad*, GstPadProbeInfo*, gpointer data) {
+  auto* p = static_cast<Probes*>(data);
+  std::lock_guard<std::mutex> guard(p->lock);
+  p->entered = Clock::now();
+  return GST_PAD_PROBE_OK;
+}
+
+GstPadProbeReturn on_leave(GstPad*, GstPadProbeInfo*, gpointer data) {
+  const Clock::time_point now = Clock::now();
+  auto* p = static_cast<Probes*>(data);
+  std::lock_guard<std::mutex> guard(p->lock);
+  // One streaming thread: the buffer leaving is the last one that entered.
+  p->frame_ms.push_back(ms_between(p->entered, now));
+  return GST_PAD_PROBE_OK;
+}
+
+[[noreturn]] void die(const std::string& what) {
+  std::cerr << "pickdetect-bench: " << what << "\n";
+  std::exit(1);
+}
+
+Result run_element(const Config& c, const std::string& model, const std::vector<cv::Mat>& frames) {
+  GError* error = nullptr;
+  GstElement* pipeline =
+      gst_parse_launch("appsrc name=src format=time block=true max-buffers=2 ! "
+                       "pickdetect name=detect draw=true post-messages=true ! fakesink sync=false",
+                       &error);
+  if (!pipeline || error)
+    die(std::string("cannot build the pipeline: ") + (error ? error->message : "?") +
+        " (is the pickdetect plugin on GST_PLUGIN_PATH?)");
+  GstElement* src = gst_bin_get_by_name(GST_BIN(pipeline), "src");
+  GstElement* detect = gst_bin_get_by_name(GST_BIN(pipeline), "detect");
+  gst_util_set_object_arg(G_OBJECT(detect), "method", c.method.c_str());
+  gst_util_set_object_arg(G_OBJECT(detect), "features", c.features.c_str());
+  g_object_set(detect, "model", model.c_str(), "detection-scale", c.detection_scale, nullptr);
+  GstCaps* caps = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, "GRAY8", "width",
+                                      G_TYPE_INT, c.res.width, "height", G_TYPE_INT, c.res.height,
+                                      "framerate", GST_TYPE_FRACTION, 30, 1, nullptr);
+  g_object_set(src, "caps", caps, nullptr);
+  gst_caps_unref(caps);
+
+  Probes probes;
+  GstPad* sink_pad = gst_element_get_static_pad(detect, "sink");
+  GstPad* src_pad = gst_element_get_static_pad(detect, "src");
+  gst_pad_add_probe(sink_pad, GST_PAD_PROBE_TYPE_BUFFER, on_enter, &probes, nullptr);
+  gst_pad_add_probe(src_pad, GST_PAD_PROBE_TYPE_BUFFER, on_leave, &probes, nullptr);
+  gst_object_unref(sink_pad);
+  gst_object_unref(src_pad);
+
+  if (gst_element_set_state(pipeline, GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE)
+    die("the pipeline refused to start (model " + model + ")");
+  GstVideoInfo info;
+  gst_video_info_set_format(&info, GST_VIDEO_FORMAT_GRAY8, static_cast<guint>(c.res.width),
+                            static_cast<guint>(c.res.height));
+  const size_t stride = static_cast<size_t>(GST_VIDEO_INFO_PLANE_STRIDE(&info, 0));
+  for (size_t i = 0; i < frames.size(); i++) {
+    GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
+    GstMapInfo map;
+    gst_buffer_map(buffer, &map, GST_MAP_WRITE);
+    for (int y = 0; y < frames[i].rows; y++)
+      std::memcpy(map.data + stride * static_cast<size_t>(y), frames[i].ptr(y),
+                  static_cast<size_t>(frames[i].cols));
+    gst_buffer_unmap(buffer, &map);
+    GST_BUFFER_PTS(buffer) = i * GST_SECOND / 30;
+    GST_BUFFER_DURATION(buffer) = GST_SECOND / 30;
+    if (gst_app_src_push_buffer(GST_APP_SRC(src), buffer) != GST_FLOW_OK)
+      break; // The error is on the bus.
+  }
+  gst_app_src_end_of_stream(GST_APP_SRC(src));
+
+  Result r;
+  r.config = c;
+  GstBus* bus = gst_element_get_bus(pipeline);
+  int message_index = 0;
+  for (bool done = false; !done;) {
+    GstMessage* m = gst_bus_timed_pop(bus, 600 * GST_SECOND);
+    if (!m)
+      die("no end of stream within 10 minutes");
+    switch (GST_MESSAGE_TYPE(m)) {
+    case GST_MESSAGE_EOS:
+      done = true;
+      break;
+    case GST_MESSAGE_ERROR: {
+      GError* err = nullptr;
+      gst_message_parse_error(m, &err, nullptr);
+      die(std::string("pipeline error: ") + err->message);
+    }
+    case GST_MESSAGE_ELEMENT: {
+      const GstStructure* s = gst_message_get_structure(m);
+      if (GST_MESSAGE_SRC(m) == GST_OBJECT(detect) && gst_structure_has_name(s, "pickdetect") &&
+          message_index++ > 0) { // The first frame warms up.
+        for (const char* stage : kStages) {
+          double v = 0;
+          if (!gst_structure_get_double(s, (std::string(stage) + "-ms").c_str(), &v))
+            die(std::string("the bus message has no ") + stage + "-ms");
+          r.stage[stage].push_back(v);
+        }
+        const GValue* list = gst_structure_get_value(s, "instances");
+        r.found.push_back(list ? gst_value_list_get_size(list) : 0);
+      }
+      break;
+    }
+    default:
+      break;
+    }
+    gst_message_unref(m);
+  }
+  gst_object_unref(bus);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(src);
+  gst_object_unref(detect);
+  gst_object_unref(pipeline);
+
+  std::lock_guard<std::mutex> guard(probes.lock);
+  if (probes.frame_ms.size() != frames.size() || r.found.size() + 1 != frames.size())
+    die("frames went missing: pushed " + std::to_string(frames.size()) + ", " +
+        std::to_string(probes.frame_ms.size()) + " came out, " + std::to_string(r.found.size()) +
+        " messages");
+  r.frame.assign(probes.frame_ms.begin() + 1, probes.frame_ms.end());
+  for (size_t i = 0; i < r.frame.size(); i++)
+    r.after_share.push_back((r.frame[i] - r.stage["features"][i]) / r.frame[i]);
+  return r;
+}
+
+/// Bare SIFT extraction on the same frames, the first warming up.
+std::vector<double> bare_sift(const std::vector<cv::Mat>& frames) {
+  std::vector<double> ms;
+  for (size_t i = 0; i < frames.size(); i++) {
+    const Clock::time_point t = Clock::now();
+    const pickdetect::Features f = pickdetect::extract_features(frames[i]);
+    const double dt = ms_between(t, Clock::now());
+    if (f.keypoints.empty())
+      die("SIFT found no keypoints in a benchmark frame");
+    if (i > 0)
+      ms.push_back(dt);
+  }
+  return ms;
+}
+
+long peak_rss_kb() {
+  struct rusage usage {};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss; // Kilobytes on Linux.
+}
+
+std::string load_average() {
+  std::ifstream f("/proc/loadavg");
+  std::string a, b, c;
+  f >> a >> b >> c;
+  return a + " " + b + " " + c;
+}
+
+/// Lets a binary in the build tree use the plugin built beside it.
+void use_build_tree_plugin() {
+#ifdef PICKDETECT_PLUGIN_BUILD_DIR
+  if (!g_file_test(PICKDETECT_PLUGIN_BUILD_DIR, G_FILE_TEST_IS_DIR))
+    return;
+  const gchar* old = g_getenv("GST_PLUGIN_PATH");
+  gchar* path =
+      old && *old ? g_strconcat(PICKDETECT_PLUGIN_BUILD_DIR, G_SEARCHPATH_SEPARATOR_S, old, nullptr)
+                  : g_strdup(PICKDETECT_PLUGIN_BUILD_DIR);
+  g_setenv("GST_PLUGIN_PATH", path, TRUE);
+  g_free(path);
+#endif
+}
+
+// ---- output --------------------------------------------------------------------------------
+
+std::string spread(const Stats& s) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "%.1f [%.1f-%.1f]", s.median, s.p10, s.p90);
+  return buf;
+}
+
+std::string res_name(const Resolution& r) {
+  return std::to_string(r.width) + "x" + std::to_string(r.height);
+}
+
+std::string json_stats(const Stats& s) {
+  std::ostringstream o;
+  o << "{\"median\": " << s.median << ", \"p10\": " << s.p10 << ", \"p90\": " << s.p90 << "}";
+  return o.str();
+}
+
+int run(int argc, char** argv) {
+  use_build_tree_plugin();
+  Options o;
+  const GOptionEntry entries[] = {
+      {"quick", 'q', 0, G_OPTION_ARG_NONE, &o.quick,
+       "Fewer frames and configurations (a smoke run: the meson benchmark)", nullptr},
+      {"json", 'j', 0, G_OPTION_ARG_NONE, &o.json, "Print the figures as JSON", nullptr},
+      {"frames", 'n', 0, G_OPTION_ARG_INT, &o.frames,
+       "Counted frames per configuration (default 15, 4 with --quick)", "N"},
+      {"data", 0, 0, G_OPTION_ARG_FILENAME, &o.data,
+       "Folder holding box.png (default: OpenCV's samples, " PICKDETECT_BENCH_DATA_DIR ")", "DIR"},
+      {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
+  GOptionContext* context = g_option_context_new(nullptr);
+  g_option_context_set_summary(context, "Times the pickdetect element per frame and per stage.");
+  g_option_context_add_main_entries(context, entries, nullptr);
+  g_option_context_add_group(context, gst_init_get_option_group());
+  GError* error = nullptr;
+  const gboolean parsed = g_option_context_parse(context, &argc, &argv, &error);
+  g_option_context_free(context);
+  if (!parsed) {
+    std::cerr << "pickdetect-bench: " << error->message << "\n";
+    g_clear_error(&error);
+    return 2;
+  }
+  const int n = o.frames > 0 ? o.frames : (o.quick ? 4 : 15);
+  const std::string model = std::string(o.data ? o.data : PICKDETECT_BENCH_DATA_DIR) + "/box.png";
+  const cv::Mat box = cv::imread(model, cv::IMREAD_GRAYSCALE);
+  if (box.empty())
+    die("cannot read " + model);
+
+  std::vector<Resolution> resolutions = {{640, 480, 0.35}, {1280, 960, 0.6}, {1920, 1080, 0.65}};
+  std::vector<int> counts = {3, 10, 30};
+  std::vector<std::string> methods = {"voting", "ransac-clustered", "ransac-all"};
+  if (o.quick) {
+    resolutions.resize(2);
+    counts = {10};
+    methods.resize(2);
+  }
+  // Fast configurations, voting at 640x480: (features, detection-scale).
+  const std::vector<std::pair<std::string, double>> fast = {
+      {"sift", 1.0}, {"sift", 0.7}, {"sift", 0.5}, {"orb", 1.0}};
+
+  const std::string load_before = load_average();
+  const Clock::time_point started = Clock::now();
+  std::vector<Result> results;
+  std::map<std::string, std::vector<double>> sift; // "WxH/count" -> bare SIFT ms.
+  int seed = 1;
+  for (const Resolution& res : resolutions) {
+    for (int count : counts) {
+      const std::vector<cv::Mat> frames = make_frames(box, res, count, n + 1, seed++);
+      const std::string key = res_name(res) + "/" + std::to_string(count);
+      std::cerr << "pickdetect-bench: " << key << " boxes: bare SIFT";
+      sift[key] = bare_sift(frames);
+      for (const std::string& method : methods) {
+        std::cerr << ", " << method;
+        Config c;
+        c.res = res;
+        c.count = count;
+        c.method = method;
+        results.push_back(run_element(c, model, frames));
+      }
+      if (res.width == 640) {
+        for (const auto& [features, scale] : fast) {
+          Config c;
+          c.res = res;
+          c.count = count;
+          c.features = features;
+          c.detection_scale = scale;
+          c.fast = true;
+          std::cerr << ", " << c.name();
+          results.push_back(run_element(c, model, frames));
+        }
+      }
+      std::cerr << "\n";
+    }
+  }
+  const double total_s = ms_between(started, Clock::now()) / 1000.0;
+  const long rss = peak_rss_kb();
+  const std::string load_after = load_average();
+
+  auto find = [&](const Resolution& res, int count, const std::string& method) -> const Result* {
+    for (const Result& r : results)
+      if (!r.config.fast && r.config.res.width == res.width && r.config.count == count &&
+          r.config.method == method)
+        return &r;
+    return nullptr;
+  };
+
+  if (o.json) {
+    std::ostringstream j;
+    j << "{\"frames_per_run\": " << n << ", \"peak_rss_kb\": " << rss
+      << ", \"seconds\": " << total_s << ", \"load_before\": \"" << load_before
+      << "\", \"load_after\": \"" << load_after << "\", \"runs\": [";
+    for (size_t i = 0; i < results.size(); i++) {
+      const Result& r = results[i];
+      j << (i ? ", " : "") << "{\"resolution\": \"" << res_name(r.config.res)
+        << "\", \"instances\": " << r.config.count << ", \"method\": \"" << r.config.method
+        << "\", \"features\": \"" << r.config.features
+        << "\", \"detection_scale\": " << r.config.detection_scale
+        << ", \"fast\": " << (r.config.fast ? "true" : "false")
+        << ", \"frame_ms\": " << json_stats(stats(r.frame));
+      for (const char* stage : kStages)
+        j << ", \"" << stage << "_ms\": " << json_stats(stats(r.stage.at(stage)));
+      j << ", \"after_features_share\": " << json_stats(stats(r.after_share))
+        << ", \"found\": " << stats(r.found).median << "}";
+    }
+    j << "], \"bare_sift_ms\": {";
+    bool first = true;
+    for (const auto& [key, ms] : sift) {
+      j << (first ? "" : ", ") << "\"" << key << "\": " << json_stats(stats(ms));
+      first = false;
+    }
+    j << "}}";
+    std::cout << j.str() << "\n";
+    return 0;
+  }
+
+  std::printf("pickdetect-bench: %d frames per run (after one warm-up), GRAY8, appsrc ! "
+              "pickdetect draw=true ! fakesink; load average %s before, %s after; %.0f s\n\n",
+              n, load_before.c_str(), load_after.c_str(), total_s);
+  std::printf("Time per frame in ms, median [p10-p90]; stages are medians; after = (frame - "
+              "features) / frame, median\n\n");
+  std::printf("| frame | boxes | method | found | frame | features | matching | clustering | "
+              "metadata | overlay | after | bare SIFT |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  for (const Result& r : results) {
+    if (r.config.fast)
+      continue;
+    const std::string key = res_name(r.config.res) + "/" + std::to_string(r.config.count);
+    std::printf("| %s | %d | %s | %.0f | %s | %s | %.2f | %.2f | %.2f | %.2f | %.1f %% | %s |\n",
+                res_name(r.config.res).c_str(), r.config.count, r.config.method.c_str(),
+                stats(r.found).median, spread(stats(r.frame)).c_str(),
+                spread(stats(r.stage.at("features"))).c_str(), stats(r.stage.at("matching")).median,
+                stats(r.stage.at("clustering")).median, stats(r.stage.at("metadata")).median,
+                stats(r.stage.at("overlay")).median, 100.0 * stats(r.after_share).median,
+                spread(stats(sift.at(key))).c_str());
+  }
+
+  std::printf("\nRatios (medians, same frames, same run)\n\n");
+  std::printf("| frame | boxes | voting / ransac-clustered | voting frame / bare SIFT | after "
+              "features (voting) |\n|---|---|---|---|---|\n");
+  for (const Resolution& res : resolutions)
+    for (int count : counts) {
+      const Result* v = find(res, count, "voting");
+      const Result* rc = find(res, count, "ransac-clustered");
+      const std::string key = res_name(res) + "/" + std::to_string(count);
+      std::printf("| %s | %d | %.2f | %.2f | %.1f %% |\n", res_name(res).c_str(), count,
+                  stats(v->frame).median / stats(rc->frame).median,
+                  stats(v->frame).median / stats(sift.at(key)).median,
+                  100.0 * stats(v->after_share).median);
+    }
+
+  std::printf("\nFast configurations, voting at 640x480 (fps from the median and from the 90th "
+              "percentile frame time)\n\n");
+  std::printf("| features | boxes | found | frame ms | fps (median) | fps (p90) |\n");
+  std::printf("|---|---|---|---|---|---|\n");
+  for (const Result& r : results) {
+    if (!r.config.fast)
+      continue;
+    const Stats s = stats(r.frame);
+    std::printf("| %s | %d | %.0f | %s | %.1f | %.1f |\n", r.config.name().c_str(), r.config.count,
+                stats(r.found).median, spread(s).c_str(), 1000.0 / s.median, 1000.0 / s.p90);
+  }
+
+  std::printf("\nPeak resident memory: %.1f MiB\n", static_cast<double>(rss) / 1024.0);
+
+  // The targets of issue 7.
+  std::printf("\nTargets\n");
+  for (const Resolution& res : resolutions) {
+    if (res.width != 1280)
+      continue;
+    for (const std::string& method : methods) {
+      const int count = std::find(counts.begin(), counts.end(), 10) != counts.end() ? 10 : 0;
+      if (const Result* r = count ? find(res, count, method) : nullptr)
+        std::printf("  after features <= 10 %% of the frame, 1280x960, 10 boxes, %s: %.1f %% %s\n",
+                    method.c_str(), 100.0 * stats(r->after_share).median,
+                    stats(r->after_share).median <= 0.10 ? "PASS" : "FAIL");
+    }
+  }
+  int faster = 0, compared = 0;
+  for (const Resolution& res : resolutions)
+    for (int count : counts) {
+      compared++;
+      faster += stats(find(res, count, "voting")->frame).median <=
+                stats(find(res, count, "ransac-clustered")->frame).median;
+    }
+  std::printf("  voting at least as fast as ransac-clustered: %d of %d frame sizes x box counts "
+              "%s\n",
+              faster, compared, faster == compared ? "PASS" : "FAIL");
+  for (const Result& r : results)
+    if (r.config.fast && r.config.count == 10)
+      std::printf("  30 fps at 640x480, 10 boxes, %s: %.1f fps at the median, %.1f at p90 %s\n",
+                  r.config.name().c_str(), 1000.0 / stats(r.frame).median,
+                  1000.0 / stats(r.frame).p90, stats(r.frame).p90 <= 1000.0 / 30 ? "PASS" : "no");
+  return 0;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+  return run(argc, argv);
+}
