@@ -13,6 +13,22 @@ constexpr int kMaxIterations = 100;
 /// Convergence: a shift shorter than this share of the bandwidth ends the climb.
 constexpr double kStopShift = 1e-3;
 
+/// Index of the cell of width `cell` holding `v`. Cells far out (or not finite: a tiny
+/// bandwidth) are clamped into the last one, so that the conversion stays defined; the distance
+/// tests done within a cell still hold there.
+long cell_of(double v, double cell) {
+  constexpr double kLast = 1 << 30;
+  const double c = std::floor(v / cell);
+  return static_cast<long>(c > -kLast && c < kLast ? c : c > 0 ? kLast : -kLast);
+}
+
+/// One key for two cell indices, shifted unsigned: a left shift of a negative number is
+/// undefined.
+long long pack(long x, long y) {
+  return static_cast<long long>(static_cast<unsigned long long>(x) << 32 ^
+                                static_cast<unsigned>(y));
+}
+
 /// Buckets the points on a grid of square cells `cell` pixels wide, so that the points within
 /// one bandwidth of a location are found in its 3x3 neighbourhood of cells.
 class Grid {
@@ -52,10 +68,7 @@ public:
   }
 
 private:
-  long cell_index(double v) const { return static_cast<long>(std::floor(v / cell_)); }
-  static long long pack(long x, long y) {
-    return (static_cast<long long>(x) << 32) ^ static_cast<long long>(static_cast<unsigned>(y));
-  }
+  long cell_index(double v) const { return cell_of(v, cell_); }
   long long key(cv::Point2f p) const { return pack(cell_index(p.x), cell_index(p.y)); }
 
   const std::vector<cv::Point2f>& points_;
@@ -97,8 +110,7 @@ std::vector<Cluster> mean_shift_clusters(const std::vector<cv::Point2f>& points,
     std::unordered_map<long long, bool> seeded;
     const double half = bandwidth / 2.0;
     for (const cv::Point2f& p : points) {
-      const long long k = (static_cast<long long>(std::floor(p.x / half)) << 32) ^
-                          static_cast<long long>(static_cast<unsigned>(std::floor(p.y / half)));
+      const long long k = pack(cell_of(p.x, half), cell_of(p.y, half));
       if (!seeded.emplace(k, true).second)
         continue;
       int support = 0;
