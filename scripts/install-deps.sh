@@ -9,6 +9,7 @@ packages=(
   gstreamer1.0-tools gstreamer1.0-plugins-base gstreamer1.0-plugins-good
   libgtest-dev opencv-doc
   python3 python3-gi python3-gst-1.0 gir1.2-gst-plugins-base-1.0
+  valgrind clang libclang-rt-14-dev  # robustness: valgrind tests, scripts/fuzz.sh (libFuzzer)
 )
 
 missing=()

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# AddressSanitizer + UndefinedBehaviorSanitizer build of everything (gcc, meson's b_sanitize) in
+# ${ASAN_BUILD_DIR:-build-asan}, then the test suites with any sanitizer report fatal.
+#
+# Left out here, and run by scripts/test.sh in the plain build (each needs a program that is not
+# built with the sanitizers to load our instrumented libraries, which ASan refuses):
+#   meta-api-valgrind    valgrind cannot run an ASan binary
+#   meta-api-pkg-config  links a plain cc program against the instrumented meta library
+#   read-instances       python3 dlopens the instrumented plugin
+#   record-annotated     gst-launch-1.0 dlopens the instrumented plugin
+#   eval-end-to-end      python3 + GStreamer's Python bindings, as read-instances
+# Extra arguments go to meson test (e.g. a test name).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh
+build=${ASAN_BUILD_DIR:-build-asan}
+if [ ! -f "$build/build.ninja" ]; then
+  meson setup "$build" . -Db_sanitize=address,undefined -Db_lundef=false
+fi
+ninja -C "$build"
+
+supp="$PWD/scripts/lsan.supp"
+export ASAN_OPTIONS=halt_on_error=1:abort_on_error=0:detect_leaks=1:detect_stack_use_after_return=0:strict_string_checks=1:check_initialization_order=1
+export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+export LSAN_OPTIONS="suppressions=$supp:print_suppressions=0"
+# The GStreamer plugin scanner is a plain program: it could not load the instrumented plugin.
+export GST_REGISTRY_FORK=no
+
+skip=(meta-api-valgrind meta-api-pkg-config read-instances record-annotated eval-end-to-end)
+tests=()
+if [ $# -eq 0 ]; then
+  while read -r name; do
+    name=${name##* / }
+    keep=1
+    for s in "${skip[@]}"; do
+      [ "$name" = "$s" ] && keep=0
+    done
+    [ $keep -eq 1 ] && tests+=("$name")
+  done < <(meson test -C "$build" --list 2>/dev/null | grep ' / ')
+  echo "sanitize: running ${#tests[@]} tests; left out (see the header): ${skip[*]}" >&2
+fi
+meson test -C "$build" --print-errorlogs --num-processes 2 --timeout-multiplier 3 "${tests[@]}" "$@"
