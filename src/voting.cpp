@@ -77,19 +77,90 @@ bool pose_from_principal_points(const ModelScene& ms, const std::vector<int>& me
   return true;
 }
 
+/// Votes of one instance agree on its rotation; those of a neighbour whose centre lies close
+/// by mostly do not. Within a centre cluster, votes are grouped by rotation with a circular
+/// mean shift of this bandwidth (degrees); each group is a hypothesis of its own.
+constexpr double kRotationBandwidthDeg = 20.0;
+
+/// Splits a centre cluster's votes (indices into ms.votes) by their rotation, largest first.
+std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
+                                                const std::vector<int>& members) {
+  std::vector<double> modes;
+  std::vector<int> support;
+  for (int seed : members) {
+    double at = ms.votes[seed].angle;
+    int n = 0;
+    for (int it = 0; it < 50; ++it) {
+      double sx = 0.0, sy = 0.0;
+      n = 0;
+      for (int i : members)
+        if (angle_difference(ms.votes[i].angle, at) <= kRotationBandwidthDeg) {
+          const double r = ms.votes[i].angle * CV_PI / 180.0;
+          sx += std::cos(r);
+          sy += std::sin(r);
+          ++n;
+        }
+      double next = std::atan2(sy, sx) * 180.0 / CV_PI;
+      next = next < 0.0 ? next + 360.0 : next;
+      const bool settled = angle_difference(next, at) < 0.01;
+      at = next;
+      if (settled)
+        break;
+    }
+    const bool known = std::any_of(modes.begin(), modes.end(), [&](double m) {
+      return angle_difference(m, at) < kRotationBandwidthDeg;
+    });
+    if (!known) {
+      modes.push_back(at);
+      support.push_back(n);
+    }
+  }
+  std::vector<std::vector<int>> groups(modes.size());
+  for (int i : members) {
+    int best = -1;
+    double best_d = kRotationBandwidthDeg;
+    for (size_t m = 0; m < modes.size(); ++m) {
+      const double d = angle_difference(ms.votes[i].angle, modes[m]);
+      if (d <= best_d) {
+        best = static_cast<int>(m);
+        best_d = d;
+      }
+    }
+    if (best >= 0)
+      groups[best].push_back(i);
+  }
+  std::stable_sort(groups.begin(), groups.end(),
+                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  return groups;
+}
+
 } // namespace
 
 std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
+  // Hypotheses: the centre clusters (the paper); with refinement, each split by rotation.
+  std::vector<std::vector<int>> hypotheses;
+  for (const Cluster& c : centre_clusters(ms)) {
+    if (!s.refine) {
+      hypotheses.push_back(c.members);
+      continue;
+    }
+    for (std::vector<int>& g : split_by_rotation(ms, c.members))
+      hypotheses.push_back(std::move(g));
+  }
+  // Strongest first: a hypothesis claims its inliers before weaker ones may.
+  std::stable_sort(hypotheses.begin(), hypotheses.end(),
+                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
+
   std::vector<Instance> found;
   std::vector<char> claimed(ms.matches.size(), 0);
-  for (const Cluster& c : centre_clusters(ms)) {
-    if (static_cast<int>(c.members.size()) < s.min_matches)
-      break; // clusters come strongest first
+  for (const std::vector<int>& members : hypotheses) {
+    if (static_cast<int>(members.size()) < s.min_matches)
+      break;
     Similarity pose;
-    if (!pose_from_principal_points(ms, c.members, s.allow_scale, pose))
+    if (!pose_from_principal_points(ms, members, s.allow_scale, pose))
       continue;
     Instance inst;
-    inst.matches = static_cast<int>(c.members.size());
+    inst.matches = static_cast<int>(members.size());
     place(inst, ms.model, pose);
     if (s.refine) {
       std::vector<int> in = refine_pose(ms, pose, s.allow_scale, claimed);
@@ -106,7 +177,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       inst.matches = static_cast<int>(in.size());
       inst.support = scene_points(ms, in);
     } else {
-      inst.support = scene_points(ms, c.members);
+      inst.support = scene_points(ms, members);
     }
     found.push_back(std::move(inst));
   }
