@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // The detector on scenes built from OpenCV's box.png at known poses.
+#include "../common/box.hpp"
 #include "../common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
@@ -11,21 +12,12 @@
 #include <sstream>
 
 using namespace pickdetect;
+using pickdetect::test_scene::box_detector;
+using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::kData;
 using pickdetect::test_scene::Pose;
 
 namespace {
-
-const std::string kData = PICKDETECT_TEST_DATA;
-
-const Model& box_model() {
-  static const Model model = load_model(kData + "/box.png");
-  return model;
-}
-
-const Detector& box_detector() {
-  static const Detector detector({box_model()});
-  return detector;
-}
 
 cv::Mat box_picture() {
   return cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Which one to pick: stacks in both orders, three levels, touching neighbours, the frame edge.
+#include "../common/box.hpp"
 #include "../common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
@@ -10,21 +11,12 @@
 #include <cmath>
 
 using namespace pickdetect;
+using pickdetect::test_scene::box_detector;
+using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::kData;
 using pickdetect::test_scene::Pose;
 
 namespace {
-
-const std::string kData = PICKDETECT_TEST_DATA;
-
-const Model& box_model() {
-  static const Model model = load_model(kData + "/box.png");
-  return model;
-}
-
-const Detector& box_detector() {
-  static const Detector detector({box_model()});
-  return detector;
-}
 
 /// Detects in a scene with boxes pasted in the given order (the last lies on top) and returns
 /// the instance found nearest each pose, in the same order.

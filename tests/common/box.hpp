@@ -1,0 +1,24 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// The model the core's tests detect: OpenCV's box.png (Debian's opencv-doc), loaded once.
+#pragma once
+
+#include <pickdetect/pickdetect.hpp>
+
+#include <string>
+
+namespace pickdetect::test_scene {
+
+/// Folder of OpenCV's sample pictures, given by the build (PICKDETECT_TEST_DATA).
+inline const std::string kData = PICKDETECT_TEST_DATA;
+
+inline const Model& box_model() {
+  static const Model model = load_model(kData + "/box.png");
+  return model;
+}
+
+inline const Detector& box_detector() {
+  static const Detector detector({box_model()});
+  return detector;
+}
+
+} // namespace pickdetect::test_scene
