@@ -56,6 +56,13 @@
  * the bus messages. All can be changed while playing; a frame is always processed with one
  * consistent set of them.
  *
+ * #GstPickDetect:threads detects several frames at once, each on a thread of its own (0: one
+ * per CPU core). Frames, their metas and their bus messages still come out in their order, and
+ * serialized events (caps, segments, EOS...) wait for the frames before them; a flush drops the
+ * frames in the works. Each frame thread beyond the first adds one frame of latency, which the
+ * element adds to upstream's in the latency query. On two cores this raises the frames per
+ * second by what OpenCV's own threads inside one frame leave unused.
+ *
  * Quality of service is on (the base transform's #GstBaseTransform:qos, as GStreamer's video
  * filters have it): when a sink downstream reports that frames arrive late, as with a live
  * source faster than detection, the frames that are already too late are dropped before
@@ -85,7 +92,8 @@
  */
 #include "gstpickdetect.h"
 
-#include "overlay.hpp"
+#include "frame.hpp"
+#include "ordered-workers.hpp"
 
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <pickdetect/detector.hpp>
@@ -96,11 +104,8 @@
 #include <glib/gstdio.h>
 
 #include <opencv2/core/persistence.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
-#include <chrono>
-#include <cmath>
 #include <exception>
 #include <memory>
 #include <stdexcept>
@@ -109,7 +114,7 @@
 #include <utility>
 #include <vector>
 
-GST_DEBUG_CATEGORY_STATIC(gst_pick_detect_debug);
+GST_DEBUG_CATEGORY(gst_pick_detect_debug); // Also used by frame.cpp.
 #define GST_CAT_DEFAULT gst_pick_detect_debug
 
 /* The formats the element takes and gives, without any conversion (both pad templates). */
@@ -131,6 +136,7 @@ enum {
   PROP_REFINE,
   PROP_DRAW,
   PROP_POST_MESSAGES,
+  PROP_THREADS,
 };
 
 #define DEFAULT_MODEL nullptr
@@ -145,6 +151,7 @@ constexpr double DEFAULT_DETECTION_SCALE = 1.0;
 constexpr gboolean DEFAULT_REFINE = TRUE;
 constexpr gboolean DEFAULT_DRAW = FALSE;
 constexpr gboolean DEFAULT_POST_MESSAGES = TRUE;
+constexpr int DEFAULT_THREADS = 1;
 
 // The element's defaults are the core's.
 static_assert(pickdetect::Settings{}.method == pickdetect::Method::Voting);
@@ -160,20 +167,6 @@ static_assert(pickdetect::Settings{}.refine == static_cast<bool>(DEFAULT_REFINE)
 
 namespace {
 
-/// How the grey picture detection reads is got from a frame; chosen once in set_info.
-enum class GreySource {
-  Plane,    ///< GRAY8 and YUV: the luma plane itself.
-  CvtColor, ///< RGB, BGR, RGBx / RGBA, BGRx / BGRA: cv::cvtColor.
-  Weighted, ///< xRGB, xBGR, ARGB, ABGR: channel-weighted sum (cv::transform).
-};
-
-/// Everything set through properties, copied as a whole for each frame.
-struct Config {
-  pickdetect::Settings settings;
-  bool draw = DEFAULT_DRAW;
-  bool post_messages = DEFAULT_POST_MESSAGES;
-};
-
 struct LoadFailure {
   GstResourceError code = GST_RESOURCE_ERROR_SETTINGS;
   std::string message;
@@ -187,18 +180,14 @@ struct GstPickDetectPrivate {
   std::string loaded_path;      ///< The file `detector` was built from.
   guint64 model_generation = 0; ///< Bumped by each `model` set; stale loads are dropped.
   bool started = false;         ///< Between start and stop.
-  Config config;
+  gstpickdetect::FrameConfig config;
   std::shared_ptr<const pickdetect::Detector> detector;
-  // ---- streaming thread only ----
-  GreySource grey_source = GreySource::Plane;
-  int cvt_code = -1;
-  cv::Mat weights; ///< 1 x channels, CV_32F, for GreySource::Weighted.
-  cv::Mat grey;    ///< Conversion target for packed RGB.
-  gstpickdetect::Overlay overlay;
-  bool can_draw = false;
-  pickdetect::Detection detection; ///< The current frame's, from transform_frame_ip.
-  double overlay_ms = 0.0;         ///< The current frame's drawing time.
-  Config frame_config;             ///< The current frame's settings.
+  int threads = DEFAULT_THREADS; ///< The `threads` property.
+  int active_threads = 1;        ///< Frame threads since start (`threads` resolved).
+  // ---- streaming thread (and state changes while it is stopped) only ----
+  std::shared_ptr<const gstpickdetect::FrameFormat> format; ///< From the caps, for new frames.
+  std::unique_ptr<gstpickdetect::OrderedWorkers> workers;   ///< With more than one frame thread.
+  GstFlowReturn drain_ret = GST_FLOW_OK; ///< A failed push while draining, told at the next frame.
 };
 
 struct _GstPickDetect {
@@ -272,12 +261,6 @@ static GstPickDetectMethod from_core_method(pickdetect::Method method) {
     break;
   }
   return GST_PICK_DETECT_METHOD_VOTING;
-}
-
-/// Milliseconds on the steady clock since `start`.
-static double ms_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
 }
 
 /* ------------------------------------------------------------------------------------------- */
@@ -481,7 +464,7 @@ static void gst_pick_detect_set_property(GObject* object, guint prop_id, const G
   }
 
   GST_OBJECT_LOCK(self);
-  Config& config = priv->config;
+  gstpickdetect::FrameConfig& config = priv->config;
   switch (prop_id) {
   case PROP_METHOD:
     config.settings.method = to_core_method(g_value_get_enum(value));
@@ -518,6 +501,9 @@ static void gst_pick_detect_set_property(GObject* object, guint prop_id, const G
   case PROP_POST_MESSAGES:
     config.post_messages = g_value_get_boolean(value);
     break;
+  case PROP_THREADS:
+    priv->threads = g_value_get_int(value);
+    break;
   default:
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
     break;
@@ -531,7 +517,7 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
   GstPickDetectPrivate* priv = self->priv;
 
   GST_OBJECT_LOCK(self);
-  const Config& config = priv->config;
+  const gstpickdetect::FrameConfig& config = priv->config;
   switch (prop_id) {
   case PROP_MODEL:
     g_value_set_string(value, priv->model_path.empty() ? nullptr : priv->model_path.c_str());
@@ -570,6 +556,9 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
     break;
   case PROP_POST_MESSAGES:
     g_value_set_boolean(value, config.post_messages);
+    break;
+  case PROP_THREADS:
+    g_value_set_int(value, priv->threads);
     break;
   default:
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
@@ -619,19 +608,36 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
     }
     GST_OBJECT_UNLOCK(self);
     if (current)
-      return TRUE;
+      break;
   }
+
+  GST_OBJECT_LOCK(self);
+  int threads = priv->threads;
+  GST_OBJECT_UNLOCK(self);
+  if (threads == 0)
+    threads = static_cast<int>(g_get_num_processors());
+  threads = std::max(threads, 1);
+  if (threads > 1)
+    priv->workers = std::make_unique<gstpickdetect::OrderedWorkers>(threads);
+  priv->drain_ret = GST_FLOW_OK;
+  GST_OBJECT_LOCK(self);
+  priv->active_threads = threads;
+  GST_OBJECT_UNLOCK(self);
+  GST_DEBUG_OBJECT(self, "%d frame thread(s)", threads);
+  return TRUE;
 }
 
 static gboolean gst_pick_detect_stop(GstBaseTransform* trans) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
+  self->priv->workers.reset(); // Drops the frames in the works, joins the frame threads.
   std::shared_ptr<const pickdetect::Detector> old;
   GST_OBJECT_LOCK(self);
   self->priv->started = false;
+  self->priv->active_threads = 1;
   old = std::move(self->priv->detector);
   self->priv->loaded_path.clear();
   GST_OBJECT_UNLOCK(self);
-  self->priv->detection = pickdetect::Detection();
+  self->priv->format.reset();
   return TRUE; // `old` is released here, outside the lock.
 }
 
@@ -642,278 +648,223 @@ static gboolean gst_pick_detect_set_info(GstVideoFilter* filter, GstCaps* incaps
   (void)outcaps;
   (void)out_info;
   GstPickDetect* self = GST_PICK_DETECT(filter);
-  GstPickDetectPrivate* priv = self->priv;
-  const GstVideoFormatInfo* finfo = in_info->finfo;
-
-  priv->cvt_code = -1;
-  priv->weights.release();
-  if (GST_VIDEO_FORMAT_INFO_IS_GRAY(finfo) || GST_VIDEO_FORMAT_INFO_IS_YUV(finfo)) {
-    priv->grey_source = GreySource::Plane;
-  } else {
-    switch (GST_VIDEO_INFO_FORMAT(in_info)) {
-    case GST_VIDEO_FORMAT_RGB:
-      priv->cvt_code = cv::COLOR_RGB2GRAY;
-      break;
-    case GST_VIDEO_FORMAT_BGR:
-      priv->cvt_code = cv::COLOR_BGR2GRAY;
-      break;
-    case GST_VIDEO_FORMAT_RGBx:
-    case GST_VIDEO_FORMAT_RGBA:
-      priv->cvt_code = cv::COLOR_RGBA2GRAY;
-      break;
-    case GST_VIDEO_FORMAT_BGRx:
-    case GST_VIDEO_FORMAT_BGRA:
-      priv->cvt_code = cv::COLOR_BGRA2GRAY;
-      break;
-    default:
-      break;
-    }
-    if (priv->cvt_code >= 0) {
-      priv->grey_source = GreySource::CvtColor;
-    } else {
-      // Same weights as cv::cvtColor's, placed on the bytes that hold R, G and B.
-      const int channels = GST_VIDEO_FORMAT_INFO_PSTRIDE(finfo, 0);
-      priv->weights = cv::Mat::zeros(1, channels, CV_32F);
-      const float luma[3] = {0.299f, 0.587f, 0.114f};
-      for (int c = 0; c < 3; c++)
-        priv->weights.at<float>(0, GST_VIDEO_FORMAT_INFO_POFFSET(finfo, c)) = luma[c];
-      priv->grey_source = GreySource::Weighted;
-    }
-  }
-  priv->grey = cv::Mat(GST_VIDEO_INFO_HEIGHT(in_info), GST_VIDEO_INFO_WIDTH(in_info), CV_8UC1);
-
-  priv->can_draw = priv->overlay.configure(*in_info);
-  if (!priv->can_draw) {
-    GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, (nullptr),
-                      ("cannot draw in format %s", GST_VIDEO_INFO_NAME(in_info)));
+  // Frames in the works keep the format they started with (they are drained before new caps).
+  auto format = std::make_shared<gstpickdetect::FrameFormat>();
+  std::string error;
+  if (!format->configure(*in_info, error)) {
+    GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, (nullptr), ("%s", error.c_str()));
     return FALSE;
   }
   GST_DEBUG_OBJECT(self, "format %s, grey from %s", GST_VIDEO_INFO_NAME(in_info),
-                   priv->grey_source == GreySource::Plane      ? "the luma plane"
-                   : priv->grey_source == GreySource::CvtColor ? "cv::cvtColor"
-                                                               : "a weighted channel sum");
+                   format->grey_source_name());
+  self->priv->format = std::move(format);
   return TRUE;
 }
 
 /* ------------------------------------------------------------------------------------------- */
 /* Per frame                                                                                   */
 
-static GstFlowReturn gst_pick_detect_transform_frame_ip(GstVideoFilter* filter,
-                                                        GstVideoFrame* frame) {
-  GstPickDetect* self = GST_PICK_DETECT(filter);
-  GstPickDetectPrivate* priv = self->priv;
-
+/// What a frame is processed with, taken as a whole under the lock: the same settings, models
+/// and format from its detection to its metas, whatever is set meanwhile.
+struct FrameInputs {
   std::shared_ptr<const pickdetect::Detector> detector;
+  std::shared_ptr<const gstpickdetect::FrameFormat> format;
+  gstpickdetect::FrameConfig config;
+};
+
+static bool take_frame_inputs(GstPickDetect* self, FrameInputs& in) {
   GST_OBJECT_LOCK(self);
-  detector = priv->detector;
-  priv->frame_config = priv->config;
+  in.detector = self->priv->detector;
+  in.config = self->priv->config;
   GST_OBJECT_UNLOCK(self);
-  const Config& config = priv->frame_config;
-
-  priv->detection = pickdetect::Detection();
-  if (!detector) {
+  in.format = self->priv->format; // Streaming thread only.
+  if (!in.detector) {
     GST_ELEMENT_ERROR(self, CORE, STATE_CHANGE, ("No model loaded"), (nullptr));
-    return GST_FLOW_ERROR;
+    return false;
   }
-
-  const int width = GST_VIDEO_FRAME_WIDTH(frame);
-  const int height = GST_VIDEO_FRAME_HEIGHT(frame);
-  try {
-    cv::Mat grey;
-    if (priv->grey_source == GreySource::Plane) {
-      grey = cv::Mat(height, width, CV_8UC1, GST_VIDEO_FRAME_PLANE_DATA(frame, 0),
-                     static_cast<size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, 0)));
-    } else {
-      const int channels = GST_VIDEO_FRAME_COMP_PSTRIDE(frame, 0);
-      cv::Mat packed(height, width, CV_8UC(channels), GST_VIDEO_FRAME_PLANE_DATA(frame, 0),
-                     static_cast<size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(frame, 0)));
-      if (priv->grey_source == GreySource::CvtColor)
-        cv::cvtColor(packed, priv->grey, priv->cvt_code);
-      else
-        cv::transform(packed, priv->grey, priv->weights);
-      grey = priv->grey;
-    }
-    priv->detection = detector->detect(grey, config.settings);
-  } catch (const std::exception& e) {
-    GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Detection failed: %s", e.what()), (nullptr));
-    return GST_FLOW_ERROR;
-  } catch (...) {
-    GST_ELEMENT_ERROR(self, STREAM, FAILED, ("Detection failed"), ("unknown exception"));
-    return GST_FLOW_ERROR;
+  if (!in.format) {
+    GST_ELEMENT_ERROR(self, CORE, NEGOTIATION, (nullptr), ("frame before caps"));
+    return false;
   }
-
-  GST_LOG_OBJECT(self, "%zu instances; features %.1f ms, matching %.1f ms, clustering %.1f ms",
-                 priv->detection.instances.size(), priv->detection.timings.features_ms,
-                 priv->detection.timings.matching_ms, priv->detection.timings.clustering_ms);
-
-  priv->overlay_ms = 0.0;
-  if (config.draw && priv->can_draw) {
-    const auto drawing = std::chrono::steady_clock::now();
-    try {
-      priv->overlay.draw(*frame, priv->detection.instances);
-      priv->overlay_ms = ms_since(drawing);
-    } catch (const std::exception& e) {
-      GST_ELEMENT_WARNING(self, STREAM, FAILED, ("Drawing failed: %s", e.what()), (nullptr));
-    }
-  }
-  return GST_FLOW_OK;
+  return true;
 }
 
-static GValue double_array(const std::vector<cv::Point2f>& points) {
-  GValue array = G_VALUE_INIT;
-  g_value_init(&array, GST_TYPE_ARRAY);
-  for (const cv::Point2f& p : points) {
-    for (const float v : {p.x, p.y}) {
-      GValue item = G_VALUE_INIT;
-      g_value_init(&item, G_TYPE_DOUBLE);
-      g_value_set_double(&item, v);
-      gst_value_array_append_and_take_value(&array, &item);
-    }
-  }
-  return array;
+static void post_frame_message(GstPickDetect* self, GstStructure* structure) {
+  if (structure)
+    gst_element_post_message(GST_ELEMENT(self),
+                             gst_message_new_element(GST_OBJECT(self), structure));
 }
 
-/// The "pick-instance" structure of ROI params and bus messages.
-static GstStructure* instance_structure(const pickdetect::Instance& instance) {
-  GstStructure* s = gst_structure_new(
-      "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "center-x",
-      G_TYPE_DOUBLE, static_cast<double>(instance.center.x), "center-y", G_TYPE_DOUBLE,
-      static_cast<double>(instance.center.y), "angle", G_TYPE_DOUBLE, instance.angle, "scale",
-      G_TYPE_DOUBLE, instance.scale, "score", G_TYPE_DOUBLE, instance.score, "matches", G_TYPE_INT,
-      instance.matches, "visibility", G_TYPE_DOUBLE, instance.visibility, "covered", G_TYPE_BOOLEAN,
-      static_cast<gboolean>(instance.covered), "pickable", G_TYPE_BOOLEAN,
-      static_cast<gboolean>(instance.pickable), "pick-order", G_TYPE_INT, instance.pick_order,
-      "grasp-x", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.x), "grasp-y", G_TYPE_DOUBLE,
-      static_cast<double>(instance.grasp.y), "grasp-angle", G_TYPE_DOUBLE, instance.grasp_angle,
-      nullptr);
-  GValue points = double_array(instance.points);
-  gst_structure_take_value(s, "points", &points);
-  GValue outline = double_array(instance.outline);
-  gst_structure_take_value(s, "outline", &outline);
-  return s;
-}
-
-static std::vector<GstPickDetectPoint> to_meta_points(const std::vector<cv::Point2f>& points) {
-  std::vector<GstPickDetectPoint> out;
-  out.reserve(points.size());
-  for (const cv::Point2f& p : points)
-    out.push_back(GstPickDetectPoint{p.x, p.y});
-  return out;
-}
-
-static void attach_metas(GstPickDetect* self, GstBuffer* buffer, int width, int height) {
-  const std::vector<pickdetect::Instance>& instances = self->priv->detection.instances;
-
-  GstPickDetectMeta* meta = gst_buffer_add_pickdetect_meta(buffer);
-  for (const pickdetect::Instance& in : instances) {
-    std::vector<GstPickDetectPoint> points = to_meta_points(in.points);
-    std::vector<GstPickDetectPoint> outline = to_meta_points(in.outline);
-    GstPickDetectInstance out{};
-    out.model_name = const_cast<gchar*>(in.model_name.c_str());
-    out.center_x = in.center.x;
-    out.center_y = in.center.y;
-    out.angle = in.angle;
-    out.scale = in.scale;
-    out.score = in.score;
-    out.matches = in.matches;
-    out.n_points = static_cast<guint>(points.size());
-    out.points = points.data();
-    out.n_outline = static_cast<guint>(outline.size());
-    out.outline = outline.data();
-    out.visibility = in.visibility;
-    out.covered = in.covered;
-    out.pickable = in.pickable; // The core's decision, reported as it is.
-    out.pick_order = in.pick_order;
-    out.grasp_x = in.grasp.x;
-    out.grasp_y = in.grasp.y;
-    out.grasp_angle = in.grasp_angle;
-    gst_pickdetect_meta_add_instance(meta, &out);
-  }
-
-  // ROI ids continue after those already on the buffer, so they stay unique within it.
-  gint next_id = 0;
-  gpointer state = nullptr;
-  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-             buffer, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-    next_id = std::max(next_id, reinterpret_cast<GstVideoRegionOfInterestMeta*>(m)->id + 1);
-  }
-
-  for (const pickdetect::Instance& in : instances) {
-    const std::vector<cv::Point2f>& shape = in.outline.empty() ? in.points : in.outline;
-    double x0 = in.center.x, y0 = in.center.y, x1 = in.center.x, y1 = in.center.y;
-    for (const cv::Point2f& p : shape) {
-      x0 = std::min<double>(x0, p.x);
-      y0 = std::min<double>(y0, p.y);
-      x1 = std::max<double>(x1, p.x);
-      y1 = std::max<double>(y1, p.y);
-    }
-    const int left = std::clamp(static_cast<int>(std::floor(x0)), 0, width);
-    const int top = std::clamp(static_cast<int>(std::floor(y0)), 0, height);
-    const int right = std::clamp(static_cast<int>(std::ceil(x1)), 0, width);
-    const int bottom = std::clamp(static_cast<int>(std::ceil(y1)), 0, height);
-    GstVideoRegionOfInterestMeta* roi = gst_buffer_add_video_region_of_interest_meta(
-        buffer, in.model_name.c_str(), static_cast<guint>(left), static_cast<guint>(top),
-        static_cast<guint>(right - left), static_cast<guint>(bottom - top));
-    roi->id = next_id++;
-    roi->parent_id = -1;
-    gst_video_region_of_interest_meta_add_param(roi, instance_structure(in));
-  }
-}
-
-static void post_message(GstPickDetect* self, GstBuffer* buffer, double metadata_ms) {
-  GstBaseTransform* trans = GST_BASE_TRANSFORM(self);
-  const GstClockTime ts = GST_BUFFER_PTS(buffer);
-  GstClockTime running_time = GST_CLOCK_TIME_NONE, stream_time = GST_CLOCK_TIME_NONE;
-  if (trans->segment.format == GST_FORMAT_TIME) {
-    running_time = gst_segment_to_running_time(&trans->segment, GST_FORMAT_TIME, ts);
-    stream_time = gst_segment_to_stream_time(&trans->segment, GST_FORMAT_TIME, ts);
-  }
-
-  GValue list = G_VALUE_INIT;
-  g_value_init(&list, GST_TYPE_LIST);
-  for (const pickdetect::Instance& in : self->priv->detection.instances) {
-    GValue item = G_VALUE_INIT;
-    g_value_init(&item, GST_TYPE_STRUCTURE);
-    g_value_take_boxed(&item, instance_structure(in));
-    gst_value_list_append_and_take_value(&list, &item);
-  }
-  GstStructure* s =
-      gst_structure_new("pickdetect", "timestamp", G_TYPE_UINT64, ts, "stream-time", G_TYPE_UINT64,
-                        stream_time, "running-time", G_TYPE_UINT64, running_time, "duration",
-                        G_TYPE_UINT64, GST_BUFFER_DURATION(buffer), nullptr);
-  gst_structure_take_value(s, "instances", &list);
-  const pickdetect::Timings& t = self->priv->detection.timings;
-  gst_structure_set(s, "features-ms", G_TYPE_DOUBLE, t.features_ms, "matching-ms", G_TYPE_DOUBLE,
-                    t.matching_ms, "clustering-ms", G_TYPE_DOUBLE, t.clustering_ms, "metadata-ms",
-                    G_TYPE_DOUBLE, metadata_ms, "overlay-ms", G_TYPE_DOUBLE, self->priv->overlay_ms,
-                    nullptr);
-  gst_element_post_message(GST_ELEMENT(self), gst_message_new_element(GST_OBJECT(self), s));
-}
-
-/// GstVideoFilter maps the frame around transform_frame_ip with a reference of its own, so the
-/// metas are added here, once the frame is unmapped and the buffer writable again.
+/// One frame: everything at once, on the streaming thread (`threads` = 1).
 static GstFlowReturn gst_pick_detect_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  GstFlowReturn ret = GST_BASE_TRANSFORM_CLASS(parent_class)->transform_ip(trans, buffer);
-  if (ret != GST_FLOW_OK)
+  FrameInputs in;
+  if (!take_frame_inputs(self, in))
+    return GST_FLOW_ERROR;
+  GstStructure* message = nullptr;
+  const GstFlowReturn ret = gstpickdetect::process_frame(
+      GST_ELEMENT(self), buffer, *in.format, in.config, *in.detector, trans->segment, &message);
+  post_frame_message(self, message);
+  return ret;
+}
+
+namespace {
+
+/// One frame on a frame thread (`threads` > 1). Owns its buffer until it is handed downstream.
+class FrameJob final : public gstpickdetect::OrderedWorkers::Job {
+public:
+  FrameJob(GstPickDetect* self, GstBuffer* buffer, FrameInputs inputs, const GstSegment& segment)
+      : self_(self), buffer_(buffer), in_(std::move(inputs)), segment_(segment) {}
+  ~FrameJob() override {
+    if (message_)
+      gst_structure_free(message_);
+    if (buffer_)
+      gst_buffer_unref(buffer_);
+  }
+  FrameJob(const FrameJob&) = delete;
+  FrameJob& operator=(const FrameJob&) = delete;
+
+  void run() override {
+    ret_ = gstpickdetect::process_frame(GST_ELEMENT(self_), buffer_, *in_.format, in_.config,
+                                        *in_.detector, segment_, &message_);
+  }
+
+  /// Posts the frame's message and hands over the buffer (null when the frame failed).
+  GstBuffer* finish(GstFlowReturn& ret) {
+    post_frame_message(self_, message_);
+    message_ = nullptr;
+    ret = ret_;
+    GstBuffer* out = ret_ == GST_FLOW_OK ? buffer_ : nullptr;
+    if (out)
+      buffer_ = nullptr;
+    return out;
+  }
+
+private:
+  GstPickDetect* self_; ///< Not owned: the element outlives its workers.
+  GstBuffer* buffer_;
+  FrameInputs in_;
+  GstSegment segment_;
+  GstStructure* message_ = nullptr;
+  GstFlowReturn ret_ = GST_FLOW_OK;
+};
+
+} // namespace
+
+/// Pushes every frame still in the works downstream, in order: before a serialized event, so
+/// that events and frames keep their order, and at EOS. Streaming thread.
+static GstFlowReturn drain_frames(GstPickDetect* self) {
+  GstPickDetectPrivate* priv = self->priv;
+  GstFlowReturn result = GST_FLOW_OK;
+  if (!priv->workers)
+    return result;
+  while (std::unique_ptr<gstpickdetect::OrderedWorkers::Job> job =
+             priv->workers->take_oldest(true)) {
+    GstFlowReturn ret = GST_FLOW_OK;
+    GstBuffer* out = static_cast<FrameJob*>(job.get())->finish(ret);
+    if (out && result == GST_FLOW_OK)
+      ret = gst_pad_push(GST_BASE_TRANSFORM_SRC_PAD(self), out);
+    else if (out)
+      gst_buffer_unref(out);
+    if (result == GST_FLOW_OK)
+      result = ret;
+  }
+  return result;
+}
+
+/// Drops every frame in the works (flush, stop): those not started are not detected.
+static void discard_frames(GstPickDetect* self) {
+  if (self->priv->workers)
+    self->priv->workers->cancel_all();
+}
+
+/// With `threads` > 1: each input frame goes to a frame thread, and the oldest frame comes out
+/// once done; the streaming thread waits only while every thread is busy. With 1, the base
+/// class's one-frame-at-a-time path (transform_ip).
+static GstFlowReturn gst_pick_detect_generate_output(GstBaseTransform* trans, GstBuffer** outbuf) {
+  GstPickDetect* self = GST_PICK_DETECT(trans);
+  GstPickDetectPrivate* priv = self->priv;
+  *outbuf = nullptr;
+  if (!priv->workers)
+    return GST_BASE_TRANSFORM_CLASS(parent_class)->generate_output(trans, outbuf);
+
+  if (priv->drain_ret != GST_FLOW_OK) { // A push while draining failed: say so now.
+    const GstFlowReturn ret = priv->drain_ret;
+    priv->drain_ret = GST_FLOW_OK;
+    gst_buffer_replace(&trans->queued_buf, nullptr);
     return ret;
-  if (!gst_buffer_is_writable(buffer)) {
-    GST_ELEMENT_ERROR(self, CORE, FAILED, (nullptr), ("buffer not writable, cannot add metas"));
-    return GST_FLOW_ERROR;
   }
+
+  if (GstBuffer* inbuf = trans->queued_buf) {
+    trans->queued_buf = nullptr;
+    FrameInputs in;
+    if (!take_frame_inputs(self, in)) {
+      gst_buffer_unref(inbuf);
+      return GST_FLOW_ERROR;
+    }
+    GstBuffer* buffer = nullptr; // The input made writable (copied only when shared).
+    const GstFlowReturn ret =
+        GST_BASE_TRANSFORM_CLASS(parent_class)->prepare_output_buffer(trans, inbuf, &buffer);
+    if (buffer != inbuf)
+      gst_buffer_unref(inbuf);
+    if (ret != GST_FLOW_OK || !buffer)
+      return ret != GST_FLOW_OK ? ret : GST_FLOW_ERROR;
+    priv->workers->submit(std::make_unique<FrameJob>(self, buffer, std::move(in), trans->segment));
+  }
+
+  const bool busy = priv->workers->pending() >= static_cast<size_t>(priv->workers->threads());
+  std::unique_ptr<gstpickdetect::OrderedWorkers::Job> job = priv->workers->take_oldest(busy);
+  if (!job)
+    return GST_FLOW_OK; // Nothing finished yet: the next input first.
+  GstFlowReturn ret = GST_FLOW_OK;
+  *outbuf = static_cast<FrameJob*>(job.get())->finish(ret);
+  return ret;
+}
+
+static gboolean gst_pick_detect_sink_event(GstBaseTransform* trans, GstEvent* event) {
+  GstPickDetect* self = GST_PICK_DETECT(trans);
+  switch (GST_EVENT_TYPE(event)) {
+  case GST_EVENT_FLUSH_STOP:
+    discard_frames(self);
+    self->priv->drain_ret = GST_FLOW_OK;
+    break;
+  default:
+    if (GST_EVENT_IS_SERIALIZED(event)) {
+      const GstFlowReturn ret = drain_frames(self);
+      if (ret != GST_FLOW_OK && self->priv->drain_ret == GST_FLOW_OK)
+        self->priv->drain_ret = ret;
+    }
+    break;
+  }
+  return GST_BASE_TRANSFORM_CLASS(parent_class)->sink_event(trans, event);
+}
+
+/// Frame threads hold `threads` - 1 frames back: that much latency is added to upstream's.
+static gboolean gst_pick_detect_query(GstBaseTransform* trans, GstPadDirection direction,
+                                      GstQuery* query) {
+  GstPickDetect* self = GST_PICK_DETECT(trans);
+  if (!GST_BASE_TRANSFORM_CLASS(parent_class)->query(trans, direction, query))
+    return FALSE;
+  if (direction != GST_PAD_SRC || GST_QUERY_TYPE(query) != GST_QUERY_LATENCY)
+    return TRUE;
+  GST_OBJECT_LOCK(self);
+  const int threads = self->priv->active_threads;
+  GST_OBJECT_UNLOCK(self);
   const GstVideoInfo* info = &GST_VIDEO_FILTER(self)->in_info;
-  try {
-    const auto attaching = std::chrono::steady_clock::now();
-    attach_metas(self, buffer, GST_VIDEO_INFO_WIDTH(info), GST_VIDEO_INFO_HEIGHT(info));
-    const double metadata_ms = ms_since(attaching);
-    if (self->priv->frame_config.post_messages)
-      post_message(self, buffer, metadata_ms);
-  } catch (const std::exception& e) {
-    GST_ELEMENT_ERROR(self, CORE, FAILED, ("Could not attach the instances: %s", e.what()),
-                      (nullptr));
-    return GST_FLOW_ERROR;
-  }
-  return GST_FLOW_OK;
+  if (threads <= 1 || GST_VIDEO_INFO_FPS_N(info) <= 0)
+    return TRUE;
+  const GstClockTime frame =
+      gst_util_uint64_scale_int(GST_SECOND, GST_VIDEO_INFO_FPS_D(info), GST_VIDEO_INFO_FPS_N(info));
+  const GstClockTime added = frame * static_cast<GstClockTime>(threads - 1);
+  gboolean live = FALSE;
+  GstClockTime min = 0, max = GST_CLOCK_TIME_NONE;
+  gst_query_parse_latency(query, &live, &min, &max);
+  if (GST_CLOCK_TIME_IS_VALID(max))
+    max += added;
+  gst_query_set_latency(query, live, min + added, max);
+  GST_DEBUG_OBJECT(self, "%d frame threads: latency + %" GST_TIME_FORMAT, threads,
+                   GST_TIME_ARGS(added));
+  return TRUE;
 }
 
 /// Keeps the metas that do not depend on anything the element could change.
@@ -1043,6 +994,17 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
                            "Post a \"pickdetect\" element message with the instances for each "
                            "frame (on by default, like facedetect's updates=every_frame)",
                            DEFAULT_POST_MESSAGES, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_THREADS,
+      g_param_spec_int(
+          "threads", "Frame threads",
+          "Frames detected at the same time, each on a thread of its own, given out in their "
+          "order: 1 = one frame at a time on the streaming thread; 0 = one per CPU core. Each "
+          "frame thread beyond the first raises the throughput on several cores and adds one "
+          "frame of latency (reported in the latency query). Takes effect at the next start",
+          0, 64, DEFAULT_THREADS,
+          static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                   GST_PARAM_MUTABLE_READY)));
 
   gst_element_class_set_static_metadata(
       element_class, "Pick detection", "Filter/Analyzer/Video",
@@ -1056,9 +1018,11 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
   trans_class->stop = GST_DEBUG_FUNCPTR(gst_pick_detect_stop);
   trans_class->transform_ip = GST_DEBUG_FUNCPTR(gst_pick_detect_transform_ip);
   trans_class->transform_meta = GST_DEBUG_FUNCPTR(gst_pick_detect_transform_meta);
+  trans_class->generate_output = GST_DEBUG_FUNCPTR(gst_pick_detect_generate_output);
+  trans_class->sink_event = GST_DEBUG_FUNCPTR(gst_pick_detect_sink_event);
+  trans_class->query = GST_DEBUG_FUNCPTR(gst_pick_detect_query);
   trans_class->passthrough_on_same_caps = FALSE;
   filter_class->set_info = GST_DEBUG_FUNCPTR(gst_pick_detect_set_info);
-  filter_class->transform_frame_ip = GST_DEBUG_FUNCPTR(gst_pick_detect_transform_frame_ip);
 
   gst_type_mark_as_plugin_api(GST_TYPE_PICK_DETECT_METHOD, static_cast<GstPluginAPIFlags>(0));
   gst_type_mark_as_plugin_api(GST_TYPE_PICK_DETECT_FEATURES, static_cast<GstPluginAPIFlags>(0));

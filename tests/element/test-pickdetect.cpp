@@ -14,6 +14,8 @@
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/video/video.h>
 
+#include "../common/harness.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -131,13 +133,8 @@ std::string caps_string(const char* format, cv::Size size) {
 
 /// A harness around a lone pickdetect (h->element is the element) with the box model.
 GstHarness* pickdetect_harness(bool draw = false) {
-  GstElement* element = gst_element_factory_make("pickdetect", nullptr);
-  fail_unless(element != nullptr, "pickdetect not found: is GST_PLUGIN_PATH set?");
-  gst_object_ref_sink(element);
-  g_object_set(element, "model", kBoxPath.c_str(), "draw", draw, nullptr);
-  GstHarness* h = gst_harness_new_with_element(element, "sink", "src");
-  gst_object_unref(element);
-  return h;
+  return pickdetect::test_harness::pickdetect_harness("model", kBoxPath.c_str(), "draw",
+                                                      static_cast<gboolean>(draw));
 }
 
 /// The instances of the meta, left to right.

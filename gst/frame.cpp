@@ -1,0 +1,305 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+#include "frame.hpp"
+
+#include <gst/pickdetect/pickdetect-meta.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <vector>
+
+GST_DEBUG_CATEGORY_EXTERN(gst_pick_detect_debug);
+#define GST_CAT_DEFAULT gst_pick_detect_debug
+
+namespace gstpickdetect {
+namespace {
+
+/// Milliseconds on the steady clock since `start`.
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
+}
+
+GValue double_array(const std::vector<cv::Point2f>& points) {
+  GValue array = G_VALUE_INIT;
+  g_value_init(&array, GST_TYPE_ARRAY);
+  for (const cv::Point2f& p : points) {
+    for (const float v : {p.x, p.y}) {
+      GValue item = G_VALUE_INIT;
+      g_value_init(&item, G_TYPE_DOUBLE);
+      g_value_set_double(&item, v);
+      gst_value_array_append_and_take_value(&array, &item);
+    }
+  }
+  return array;
+}
+
+/// The "pick-instance" structure of ROI params and bus messages.
+GstStructure* instance_structure(const pickdetect::Instance& instance) {
+  GstStructure* s = gst_structure_new(
+      "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "center-x",
+      G_TYPE_DOUBLE, static_cast<double>(instance.center.x), "center-y", G_TYPE_DOUBLE,
+      static_cast<double>(instance.center.y), "angle", G_TYPE_DOUBLE, instance.angle, "scale",
+      G_TYPE_DOUBLE, instance.scale, "score", G_TYPE_DOUBLE, instance.score, "matches", G_TYPE_INT,
+      instance.matches, "visibility", G_TYPE_DOUBLE, instance.visibility, "covered", G_TYPE_BOOLEAN,
+      static_cast<gboolean>(instance.covered), "pickable", G_TYPE_BOOLEAN,
+      static_cast<gboolean>(instance.pickable), "pick-order", G_TYPE_INT, instance.pick_order,
+      "grasp-x", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.x), "grasp-y", G_TYPE_DOUBLE,
+      static_cast<double>(instance.grasp.y), "grasp-angle", G_TYPE_DOUBLE, instance.grasp_angle,
+      nullptr);
+  GValue points = double_array(instance.points);
+  gst_structure_take_value(s, "points", &points);
+  GValue outline = double_array(instance.outline);
+  gst_structure_take_value(s, "outline", &outline);
+  return s;
+}
+
+std::vector<GstPickDetectPoint> to_meta_points(const std::vector<cv::Point2f>& points) {
+  std::vector<GstPickDetectPoint> out;
+  out.reserve(points.size());
+  for (const cv::Point2f& p : points)
+    out.push_back(GstPickDetectPoint{p.x, p.y});
+  return out;
+}
+
+void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& instances, int width,
+                  int height) {
+  GstPickDetectMeta* meta = gst_buffer_add_pickdetect_meta(buffer);
+  for (const pickdetect::Instance& in : instances) {
+    std::vector<GstPickDetectPoint> points = to_meta_points(in.points);
+    std::vector<GstPickDetectPoint> outline = to_meta_points(in.outline);
+    GstPickDetectInstance out{};
+    out.model_name = const_cast<gchar*>(in.model_name.c_str());
+    out.center_x = in.center.x;
+    out.center_y = in.center.y;
+    out.angle = in.angle;
+    out.scale = in.scale;
+    out.score = in.score;
+    out.matches = in.matches;
+    out.n_points = static_cast<guint>(points.size());
+    out.points = points.data();
+    out.n_outline = static_cast<guint>(outline.size());
+    out.outline = outline.data();
+    out.visibility = in.visibility;
+    out.covered = in.covered;
+    out.pickable = in.pickable; // The core's decision, reported as it is.
+    out.pick_order = in.pick_order;
+    out.grasp_x = in.grasp.x;
+    out.grasp_y = in.grasp.y;
+    out.grasp_angle = in.grasp_angle;
+    gst_pickdetect_meta_add_instance(meta, &out);
+  }
+
+  // ROI ids continue after those already on the buffer, so they stay unique within it.
+  gint next_id = 0;
+  gpointer state = nullptr;
+  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
+             buffer, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
+    next_id = std::max(next_id, reinterpret_cast<GstVideoRegionOfInterestMeta*>(m)->id + 1);
+  }
+
+  for (const pickdetect::Instance& in : instances) {
+    const std::vector<cv::Point2f>& shape = in.outline.empty() ? in.points : in.outline;
+    double x0 = in.center.x, y0 = in.center.y, x1 = in.center.x, y1 = in.center.y;
+    for (const cv::Point2f& p : shape) {
+      x0 = std::min<double>(x0, p.x);
+      y0 = std::min<double>(y0, p.y);
+      x1 = std::max<double>(x1, p.x);
+      y1 = std::max<double>(y1, p.y);
+    }
+    const int left = std::clamp(static_cast<int>(std::floor(x0)), 0, width);
+    const int top = std::clamp(static_cast<int>(std::floor(y0)), 0, height);
+    const int right = std::clamp(static_cast<int>(std::ceil(x1)), 0, width);
+    const int bottom = std::clamp(static_cast<int>(std::ceil(y1)), 0, height);
+    GstVideoRegionOfInterestMeta* roi = gst_buffer_add_video_region_of_interest_meta(
+        buffer, in.model_name.c_str(), static_cast<guint>(left), static_cast<guint>(top),
+        static_cast<guint>(right - left), static_cast<guint>(bottom - top));
+    roi->id = next_id++;
+    roi->parent_id = -1;
+    gst_video_region_of_interest_meta_add_param(roi, instance_structure(in));
+  }
+}
+
+GstStructure* message_structure(GstBuffer* buffer, const GstSegment& segment,
+                                const pickdetect::Detection& detection, double metadata_ms,
+                                double overlay_ms) {
+  const GstClockTime ts = GST_BUFFER_PTS(buffer);
+  GstClockTime running_time = GST_CLOCK_TIME_NONE, stream_time = GST_CLOCK_TIME_NONE;
+  if (segment.format == GST_FORMAT_TIME) {
+    running_time = gst_segment_to_running_time(&segment, GST_FORMAT_TIME, ts);
+    stream_time = gst_segment_to_stream_time(&segment, GST_FORMAT_TIME, ts);
+  }
+
+  GValue list = G_VALUE_INIT;
+  g_value_init(&list, GST_TYPE_LIST);
+  for (const pickdetect::Instance& in : detection.instances) {
+    GValue item = G_VALUE_INIT;
+    g_value_init(&item, GST_TYPE_STRUCTURE);
+    g_value_take_boxed(&item, instance_structure(in));
+    gst_value_list_append_and_take_value(&list, &item);
+  }
+  GstStructure* s =
+      gst_structure_new("pickdetect", "timestamp", G_TYPE_UINT64, ts, "stream-time", G_TYPE_UINT64,
+                        stream_time, "running-time", G_TYPE_UINT64, running_time, "duration",
+                        G_TYPE_UINT64, GST_BUFFER_DURATION(buffer), nullptr);
+  gst_structure_take_value(s, "instances", &list);
+  const pickdetect::Timings& t = detection.timings;
+  gst_structure_set(s, "features-ms", G_TYPE_DOUBLE, t.features_ms, "matching-ms", G_TYPE_DOUBLE,
+                    t.matching_ms, "clustering-ms", G_TYPE_DOUBLE, t.clustering_ms, "metadata-ms",
+                    G_TYPE_DOUBLE, metadata_ms, "overlay-ms", G_TYPE_DOUBLE, overlay_ms, nullptr);
+  return s;
+}
+
+/// Detection and drawing on the mapped frame. Errors are posted and returned.
+GstFlowReturn detect_and_draw(GstElement* element, GstVideoFrame& frame, const FrameFormat& format,
+                              const FrameConfig& config, const pickdetect::Detector& detector,
+                              pickdetect::Detection& detection, double& overlay_ms) {
+  try {
+    cv::Mat scratch;
+    detection = detector.detect(format.grey(frame, scratch), config.settings);
+  } catch (const std::exception& e) {
+    GST_ELEMENT_ERROR(element, STREAM, FAILED, ("Detection failed: %s", e.what()), (nullptr));
+    return GST_FLOW_ERROR;
+  } catch (...) {
+    GST_ELEMENT_ERROR(element, STREAM, FAILED, ("Detection failed"), ("unknown exception"));
+    return GST_FLOW_ERROR;
+  }
+  GST_LOG_OBJECT(element, "%zu instances; features %.1f ms, matching %.1f ms, clustering %.1f ms",
+                 detection.instances.size(), detection.timings.features_ms,
+                 detection.timings.matching_ms, detection.timings.clustering_ms);
+
+  overlay_ms = 0.0;
+  if (config.draw) {
+    const auto drawing = std::chrono::steady_clock::now();
+    try {
+      format.overlay().draw(frame, detection.instances);
+      overlay_ms = ms_since(drawing);
+    } catch (const std::exception& e) {
+      GST_ELEMENT_WARNING(element, STREAM, FAILED, ("Drawing failed: %s", e.what()), (nullptr));
+    }
+  }
+  return GST_FLOW_OK;
+}
+
+} // namespace
+
+bool FrameFormat::configure(const GstVideoInfo& info, std::string& error) {
+  info_ = info;
+  const GstVideoFormatInfo* finfo = info.finfo;
+  cvt_code_ = -1;
+  weights_.release();
+  if (GST_VIDEO_FORMAT_INFO_IS_GRAY(finfo) || GST_VIDEO_FORMAT_INFO_IS_YUV(finfo)) {
+    grey_source_ = GreySource::Plane;
+  } else {
+    switch (GST_VIDEO_INFO_FORMAT(&info)) {
+    case GST_VIDEO_FORMAT_RGB:
+      cvt_code_ = cv::COLOR_RGB2GRAY;
+      break;
+    case GST_VIDEO_FORMAT_BGR:
+      cvt_code_ = cv::COLOR_BGR2GRAY;
+      break;
+    case GST_VIDEO_FORMAT_RGBx:
+    case GST_VIDEO_FORMAT_RGBA:
+      cvt_code_ = cv::COLOR_RGBA2GRAY;
+      break;
+    case GST_VIDEO_FORMAT_BGRx:
+    case GST_VIDEO_FORMAT_BGRA:
+      cvt_code_ = cv::COLOR_BGRA2GRAY;
+      break;
+    default:
+      break;
+    }
+    if (cvt_code_ >= 0) {
+      grey_source_ = GreySource::CvtColor;
+    } else {
+      // Same weights as cv::cvtColor's, placed on the bytes that hold R, G and B.
+      const int channels = GST_VIDEO_FORMAT_INFO_PSTRIDE(finfo, 0);
+      weights_ = cv::Mat::zeros(1, channels, CV_32F);
+      const float luma[3] = {0.299f, 0.587f, 0.114f};
+      for (int c = 0; c < 3; c++)
+        weights_.at<float>(0, GST_VIDEO_FORMAT_INFO_POFFSET(finfo, c)) = luma[c];
+      grey_source_ = GreySource::Weighted;
+    }
+  }
+  if (!overlay_.configure(info)) {
+    error = std::string("cannot draw in format ") + GST_VIDEO_INFO_NAME(&info);
+    return false;
+  }
+  return true;
+}
+
+const char* FrameFormat::grey_source_name() const {
+  switch (grey_source_) {
+  case GreySource::Plane:
+    return "the luma plane";
+  case GreySource::CvtColor:
+    return "cv::cvtColor";
+  case GreySource::Weighted:
+    break;
+  }
+  return "a weighted channel sum";
+}
+
+cv::Mat FrameFormat::grey(const GstVideoFrame& frame, cv::Mat& scratch) const {
+  const int width = GST_VIDEO_FRAME_WIDTH(&frame);
+  const int height = GST_VIDEO_FRAME_HEIGHT(&frame);
+  const size_t stride = static_cast<size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0));
+  void* data = GST_VIDEO_FRAME_PLANE_DATA(&frame, 0);
+  if (grey_source_ == GreySource::Plane)
+    return cv::Mat(height, width, CV_8UC1, data, stride);
+  const int channels = GST_VIDEO_FRAME_COMP_PSTRIDE(&frame, 0);
+  const cv::Mat packed(height, width, CV_8UC(channels), data, stride);
+  if (grey_source_ == GreySource::CvtColor)
+    cv::cvtColor(packed, scratch, cvt_code_);
+  else
+    cv::transform(packed, scratch, weights_);
+  return scratch;
+}
+
+GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
+                            const FrameConfig& config, const pickdetect::Detector& detector,
+                            const GstSegment& segment, GstStructure** message) {
+  pickdetect::Detection detection;
+  double overlay_ms = 0.0;
+  {
+    GstVideoFrame frame;
+    const auto flags = static_cast<GstMapFlags>(config.draw ? GST_MAP_READWRITE : GST_MAP_READ);
+    if (!gst_video_frame_map(&frame, const_cast<GstVideoInfo*>(&format.info()), buffer, flags)) {
+      GST_ELEMENT_ERROR(element, STREAM, FAILED, ("Could not map the frame"),
+                        ("buffer of %" G_GSIZE_FORMAT " bytes, caps %s %dx%d",
+                         gst_buffer_get_size(buffer), GST_VIDEO_INFO_NAME(&format.info()),
+                         GST_VIDEO_INFO_WIDTH(&format.info()),
+                         GST_VIDEO_INFO_HEIGHT(&format.info())));
+      return GST_FLOW_ERROR;
+    }
+    const GstFlowReturn ret =
+        detect_and_draw(element, frame, format, config, detector, detection, overlay_ms);
+    gst_video_frame_unmap(&frame);
+    if (ret != GST_FLOW_OK)
+      return ret;
+  }
+
+  // The frame is unmapped, so the buffer is writable again for the metas.
+  if (!gst_buffer_is_writable(buffer)) {
+    GST_ELEMENT_ERROR(element, CORE, FAILED, (nullptr), ("buffer not writable, cannot add metas"));
+    return GST_FLOW_ERROR;
+  }
+  try {
+    const auto attaching = std::chrono::steady_clock::now();
+    attach_metas(buffer, detection.instances, GST_VIDEO_INFO_WIDTH(&format.info()),
+                 GST_VIDEO_INFO_HEIGHT(&format.info()));
+    const double metadata_ms = ms_since(attaching);
+    if (config.post_messages && message)
+      *message = message_structure(buffer, segment, detection, metadata_ms, overlay_ms);
+  } catch (const std::exception& e) {
+    GST_ELEMENT_ERROR(element, CORE, FAILED, ("Could not attach the instances: %s", e.what()),
+                      (nullptr));
+    return GST_FLOW_ERROR;
+  }
+  return GST_FLOW_OK;
+}
+
+} // namespace gstpickdetect

@@ -1,0 +1,65 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// The pickdetect element's work on one frame: the grey view detection reads, detection, the
+// overlay, the metas and the bus message's structure. Holds no element state, so frames can be
+// worked on in any thread.
+#pragma once
+
+#include "overlay.hpp"
+
+#include <pickdetect/detector.hpp>
+
+#include <gst/gst.h>
+#include <gst/video/video.h>
+
+#include <opencv2/core.hpp>
+
+#include <string>
+
+namespace gstpickdetect {
+
+/// Everything set through the element's properties that a frame is processed with.
+struct FrameConfig {
+  pickdetect::Settings settings;
+  bool draw = false;
+  bool post_messages = true;
+};
+
+/// What the negotiated caps decide about working on a frame; set once per caps.
+class FrameFormat {
+public:
+  /// Chooses how to read grey from `info`'s format and how to draw in it. False, with `error`
+  /// set, for a format the element cannot draw in.
+  bool configure(const GstVideoInfo& info, std::string& error);
+
+  const GstVideoInfo& info() const { return info_; }
+  /// How grey is read, for the debug log.
+  const char* grey_source_name() const;
+
+  /// A grey view of the mapped frame: the luma plane itself, or a conversion into `scratch`.
+  cv::Mat grey(const GstVideoFrame& frame, cv::Mat& scratch) const;
+
+  const Overlay& overlay() const { return overlay_; }
+
+private:
+  enum class GreySource {
+    Plane,    ///< GRAY8 and YUV: the luma plane itself.
+    CvtColor, ///< RGB, BGR, RGBx / RGBA, BGRx / BGRA: cv::cvtColor.
+    Weighted, ///< xRGB, xBGR, ARGB, ABGR: channel-weighted sum (cv::transform).
+  };
+
+  GstVideoInfo info_{};
+  GreySource grey_source_ = GreySource::Plane;
+  int cvt_code_ = -1;
+  cv::Mat weights_; ///< 1 x channels, CV_32F, for GreySource::Weighted.
+  Overlay overlay_;
+};
+
+/// Detects on `buffer` (writable, of `format`), draws when `config.draw`, and attaches the
+/// metas (see the element's documentation). When `config.post_messages`, `*message` receives the
+/// "pickdetect" element message's structure (the caller posts it), timestamps taken from
+/// `segment`. Errors are posted on `element` and returned as GST_FLOW_ERROR. Never throws.
+GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
+                            const FrameConfig& config, const pickdetect::Detector& detector,
+                            const GstSegment& segment, GstStructure** message);
+
+} // namespace gstpickdetect
