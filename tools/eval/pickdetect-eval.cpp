@@ -258,6 +258,11 @@ int run(int argc, char** argv) {
                 << " is chosen by the tool (use --method to restrict methods)\n";
       return 2;
     }
+    if (name == "threads" && value != "1") {
+      std::cerr << "pickdetect-eval: --set threads: the tool pushes one frame and waits for it, "
+                   "and frame threads hold frames back; the instances do not depend on threads\n";
+      return 2;
+    }
     properties.emplace_back(name, value);
   }
 
