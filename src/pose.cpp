@@ -2,6 +2,7 @@
 // Poses: similarity transforms, their least-squares fit (Umeyama, Eigen) and angle arithmetic.
 #include <pickdetect/pose.hpp>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
 #include <cmath>
@@ -12,6 +13,28 @@ namespace {
 double wrap_degrees(double a) {
   a = std::fmod(a, 360.0);
   return a < 0.0 ? a + 360.0 : a;
+}
+
+/// Gauss-Newton: at most this many steps, ended earlier by a step this small (normalised units).
+constexpr int kHomographySteps = 10;
+constexpr double kHomographyStop = 1e-10;
+/// Smallest pivot of the normal equations, relative to the largest, of a determined fit.
+constexpr double kMinPivot = 1e-9;
+
+/// Similarity normalisation (Hartley): centroid to the origin, mean distance sqrt(2).
+Eigen::Matrix3d normaliser(const std::vector<cv::Point2f>& points) {
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const cv::Point2f& p : points)
+    mean += Eigen::Vector2d(p.x, p.y);
+  mean /= static_cast<double>(points.size());
+  double spread = 0.0;
+  for (const cv::Point2f& p : points)
+    spread += (Eigen::Vector2d(p.x, p.y) - mean).norm();
+  spread /= static_cast<double>(points.size());
+  const double k = spread > 1e-12 ? std::sqrt(2.0) / spread : 1.0;
+  Eigen::Matrix3d t;
+  t << k, 0.0, -k * mean.x(), 0.0, k, -k * mean.y(), 0.0, 0.0, 1.0;
+  return t;
 }
 
 } // namespace
@@ -57,6 +80,72 @@ bool fit_similarity(const std::vector<cv::Point2f>& from, const std::vector<cv::
   return true;
 }
 
+cv::Matx33d to_matrix(const Similarity& pose) {
+  const double rad = pose.angle * CV_PI / 180.0;
+  const double c = std::cos(rad) * pose.scale, s = std::sin(rad) * pose.scale;
+  return {c, -s, pose.translation.x, s, c, pose.translation.y, 0.0, 0.0, 1.0};
+}
+
+bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                    const cv::Matx33d& initial, cv::Matx33d& out) {
+  const size_t n = from.size();
+  if (n < 4 || to.size() != n)
+    return false;
+  // In normalised coordinates the eight unknowns have comparable sizes, so the normal
+  // equations stay well conditioned; the residuals are scaled by the scene's factor only.
+  const Eigen::Matrix3d tf = normaliser(from), tt = normaliser(to);
+  Eigen::Matrix3d h0;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      h0(r, c) = initial(r, c);
+  Eigen::Matrix3d hn = tt * h0 * tf.inverse();
+  if (!(std::abs(hn(2, 2)) > 1e-12))
+    return false;
+  hn /= hn(2, 2);
+  std::vector<Eigen::Vector2d> x(n), y(n);
+  for (size_t i = 0; i < n; ++i) {
+    x[i] = (tf * Eigen::Vector3d(from[i].x, from[i].y, 1.0)).head<2>();
+    y[i] = (tt * Eigen::Vector3d(to[i].x, to[i].y, 1.0)).head<2>();
+  }
+  for (int step = 0; step < kHomographySteps; ++step) {
+    Eigen::Matrix<double, 8, 8> jtj = Eigen::Matrix<double, 8, 8>::Zero();
+    Eigen::Matrix<double, 8, 1> jtr = Eigen::Matrix<double, 8, 1>::Zero();
+    for (size_t i = 0; i < n; ++i) {
+      const double px = x[i].x(), py = x[i].y();
+      const double w = hn(2, 0) * px + hn(2, 1) * py + 1.0;
+      if (!(w > 1e-9))
+        return false; // A point maps behind the camera: no valid picture of the object.
+      const double u = (hn(0, 0) * px + hn(0, 1) * py + hn(0, 2)) / w;
+      const double v = (hn(1, 0) * px + hn(1, 1) * py + hn(1, 2)) / w;
+      Eigen::Matrix<double, 2, 8> j;
+      j << px / w, py / w, 1.0 / w, 0.0, 0.0, 0.0, -u * px / w, -u * py / w, //
+          0.0, 0.0, 0.0, px / w, py / w, 1.0 / w, -v * px / w, -v * py / w;
+      const Eigen::Vector2d r(u - y[i].x(), v - y[i].y());
+      jtj.noalias() += j.transpose() * j;
+      jtr.noalias() += j.transpose() * r;
+    }
+    const Eigen::LDLT<Eigen::Matrix<double, 8, 8>> solver(jtj);
+    // A (near) zero pivot: the points do not fix the eight unknowns (collinear, repeated).
+    const Eigen::Matrix<double, 8, 1> pivots = solver.vectorD();
+    if (solver.info() != Eigen::Success || !(pivots.minCoeff() > kMinPivot * pivots.maxCoeff()))
+      return false;
+    const Eigen::Matrix<double, 8, 1> delta = solver.solve(-jtr);
+    if (!delta.allFinite())
+      return false;
+    for (int k = 0; k < 8; ++k)
+      hn(k / 3, k % 3) += delta(k);
+    if (delta.squaredNorm() < kHomographyStop)
+      break;
+  }
+  const Eigen::Matrix3d h = tt.inverse() * hn * tf;
+  if (!h.allFinite() || !(std::abs(h(2, 2)) > 1e-12))
+    return false;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      out(r, c) = h(r, c) / h(2, 2);
+  return true;
+}
+
 Similarity similarity_near(const cv::Matx33d& h, cv::Point2f at) {
   const double x = at.x, y = at.y;
   const double w = h(2, 0) * x + h(2, 1) * y + h(2, 2);
@@ -79,6 +168,10 @@ Similarity similarity_near(const cv::Matx33d& h, cv::Point2f at) {
 }
 
 double angle_difference(double a, double b) {
+  if (a >= 0.0 && a < 360.0 && b >= 0.0 && b < 360.0) { // Wrapped already: no fmod.
+    const double d = std::fabs(a - b);
+    return d > 180.0 ? 360.0 - d : d;
+  }
   const double d = std::fabs(wrap_degrees(a - b));
   return d > 180.0 ? 360.0 - d : d;
 }

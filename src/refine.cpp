@@ -35,14 +35,17 @@ constexpr double kMaxPerspectiveShift = 0.15;
 std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, bool allow_scale,
                             const std::vector<char>& claimed) {
   const double tol = std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * pose.scale);
+  const cv::Matx33d map = to_matrix(pose);
   std::vector<int> in;
   for (size_t i = 0; i < ms.matches.size(); ++i) {
     if (claimed[i])
       continue;
     const Match& m = ms.matches[i];
-    const cv::Point2f predicted = pose.apply(ms.model_keypoints[m.model_point].pt);
+    const cv::Point2f model = ms.model_keypoints[m.model_point].pt;
     const cv::Point2f seen = ms.scene_keypoints[m.scene_point].pt;
-    if (std::hypot(predicted.x - seen.x, predicted.y - seen.y) > tol)
+    const double dx = map(0, 0) * model.x + map(0, 1) * model.y + map(0, 2) - seen.x;
+    const double dy = map(1, 0) * model.x + map(1, 1) * model.y + map(1, 2) - seen.y;
+    if (dx * dx + dy * dy > tol * tol)
       continue;
     if (angle_difference(ms.votes[i].angle, pose.angle) > kInlierAngleDeg)
       continue;
@@ -103,25 +106,23 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
   const std::vector<cv::Point2f> similar = pose.apply(ms.model.outline);
   std::vector<int> current = in;
   bool found = false;
+  cv::Matx33d candidate = to_matrix(pose);
   for (int round = 0; round < kRefineRounds; ++round) {
     std::vector<cv::Point2f> from, to;
     for (int i : current) {
       from.push_back(model_point(i));
       to.push_back(scene_point(i));
     }
-    const cv::Mat fit = cv::findHomography(from, to, 0);
-    if (fit.empty() || !cv::checkRange(fit))
+    if (!fit_homography(from, to, candidate, candidate))
       break;
-    const cv::Matx33d candidate(fit);
     std::vector<cv::Point2f> outline;
-    cv::perspectiveTransform(ms.model.outline, outline, fit);
+    cv::perspectiveTransform(ms.model.outline, outline, cv::Mat(candidate));
     bool close = true;
     for (size_t k = 0; k < outline.size() && close; ++k)
       close = cv::norm(outline[k] - similar[k]) <= kMaxPerspectiveShift * side;
     if (!close)
       break;
     std::vector<int> again;
-    std::vector<cv::Point2f> predicted;
     for (size_t i = 0; i < ms.matches.size(); ++i) {
       if (claimed[i])
         continue;
@@ -131,9 +132,13 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
       if (allow_scale && (v.scale / pose.scale > kInlierScaleFactor ||
                           v.scale / pose.scale < 1.0 / kInlierScaleFactor))
         continue;
-      cv::perspectiveTransform(std::vector<cv::Point2f>{model_point(static_cast<int>(i))},
-                               predicted, fit);
-      if (cv::norm(predicted[0] - scene_point(static_cast<int>(i))) <= tol)
+      const cv::Point2f m = model_point(static_cast<int>(i));
+      const cv::Vec3d p = candidate * cv::Vec3d(m.x, m.y, 1.0);
+      if (!(p[2] > 0.0)) // Behind the camera: no inlier.
+        continue;
+      const cv::Point2f seen = scene_point(static_cast<int>(i));
+      const double dx = p[0] / p[2] - seen.x, dy = p[1] / p[2] - seen.y;
+      if (dx * dx + dy * dy <= tol * tol)
         again.push_back(static_cast<int>(i));
     }
     if (again.size() < kMinPerspectiveMatches)

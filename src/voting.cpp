@@ -85,21 +85,40 @@ constexpr double kRotationBandwidthDeg = 20.0;
 /// Splits a centre cluster's votes (indices into ms.votes) by their rotation, largest first.
 std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
                                                 const std::vector<int>& members) {
+  // Each vote's rotation as a unit vector: a vote lies within the bandwidth of an angle when
+  // its dot product with that angle's unit vector is at least cos(bandwidth).
+  const double window = std::cos(kRotationBandwidthDeg * CV_PI / 180.0);
+  std::vector<cv::Point2d> unit(members.size());
+  for (size_t k = 0; k < members.size(); ++k) {
+    const double r = ms.votes[members[k]].angle * CV_PI / 180.0;
+    unit[k] = cv::Point2d(std::cos(r), std::sin(r));
+  }
   std::vector<double> modes;
   std::vector<int> support;
+  // Seeds: the first vote of each occupied bin of half a bandwidth (bin seeding, as for the
+  // centres), at most 36 climbs however many votes the cluster has.
+  constexpr int kBins = static_cast<int>(720.0 / kRotationBandwidthDeg) + 1;
+  std::vector<char> seeded(kBins, 0);
   for (int seed : members) {
+    const int bin = static_cast<int>(ms.votes[seed].angle / (kRotationBandwidthDeg / 2.0));
+    if (bin < 0 || bin >= kBins || seeded[bin])
+      continue;
+    seeded[bin] = 1;
     double at = ms.votes[seed].angle;
     int n = 0;
     for (int it = 0; it < 50; ++it) {
+      const double r = at * CV_PI / 180.0;
+      const cv::Point2d dir(std::cos(r), std::sin(r));
       double sx = 0.0, sy = 0.0;
       n = 0;
-      for (int i : members)
-        if (angle_difference(ms.votes[i].angle, at) <= kRotationBandwidthDeg) {
-          const double r = ms.votes[i].angle * CV_PI / 180.0;
-          sx += std::cos(r);
-          sy += std::sin(r);
+      for (const cv::Point2d& u : unit)
+        if (u.dot(dir) >= window) {
+          sx += u.x;
+          sy += u.y;
           ++n;
         }
+      if (n == 0)
+        break;
       double next = std::atan2(sy, sx) * 180.0 / CV_PI;
       next = next < 0.0 ? next + 360.0 : next;
       const bool settled = angle_difference(next, at) < 0.01;

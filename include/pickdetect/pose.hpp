@@ -23,6 +23,16 @@ struct Similarity {
 bool fit_similarity(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
                     bool allow_scale, Similarity& out);
 
+/// Homography that carries `from` onto `to` with the least squared distance in `to`'s pixels
+/// (Gauss-Newton on the eight free entries, in normalised coordinates), starting from `initial`,
+/// which must already be close (e.g. a similarity fitted on the same points). Needs four points
+/// or more; returns false when the fit is degenerate or does not converge.
+bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                    const cv::Matx33d& initial, cv::Matx33d& out);
+
+/// The similarity as a 3x3 matrix.
+cv::Matx33d to_matrix(const Similarity& pose);
+
 /// Similarity of a 3x3 homography near `at` (model coordinates): rotation and scale of the
 /// homography's local linear part there, and where it carries `at`.
 Similarity similarity_near(const cv::Matx33d& homography, cv::Point2f at);

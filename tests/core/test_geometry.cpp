@@ -67,6 +67,34 @@ TEST(Pose, SimilarityNearAHomographyMatchesItsAffinePart) {
   EXPECT_NEAR(near.translation.x, 300.0, 1e-4);
 }
 
+TEST(Pose, FitHomographyRecoversATiltFromANearbySimilarity) {
+  // A model seen a little out of the picture plane, and the similarity closest to it.
+  const cv::Matx33d truth(0.9, -0.25, 310.0, 0.3, 0.85, 190.0, 2e-4, -1.5e-4, 1.0);
+  std::vector<cv::Point2f> from, to;
+  for (int y = 0; y <= 200; y += 40)
+    for (int x = 0; x <= 300; x += 50) {
+      from.emplace_back(static_cast<float>(x), static_cast<float>(y));
+      const cv::Vec3d p = truth * cv::Vec3d(x, y, 1.0);
+      to.emplace_back(static_cast<float>(p[0] / p[2]), static_cast<float>(p[1] / p[2]));
+    }
+  Similarity start;
+  ASSERT_TRUE(fit_similarity(from, to, true, start));
+  cv::Matx33d fit;
+  ASSERT_TRUE(fit_homography(from, to, to_matrix(start), fit));
+  for (size_t i = 0; i < from.size(); ++i) {
+    const cv::Vec3d p = fit * cv::Vec3d(from[i].x, from[i].y, 1.0);
+    EXPECT_NEAR(p[0] / p[2], to[i].x, 1e-3);
+    EXPECT_NEAR(p[1] / p[2], to[i].y, 1e-3);
+  }
+  EXPECT_NEAR(fit(2, 0), truth(2, 0), 1e-7);
+  // Three points cannot fix a homography; collinear ones neither.
+  cv::Matx33d unused;
+  EXPECT_FALSE(fit_homography({from.begin(), from.begin() + 3}, {to.begin(), to.begin() + 3},
+                              to_matrix(start), unused));
+  const std::vector<cv::Point2f> line = {{0, 0}, {10, 0}, {20, 0}, {30, 0}, {40, 0}};
+  EXPECT_FALSE(fit_homography(line, line, cv::Matx33d::eye(), unused));
+}
+
 TEST(Voting, VotesCarryPrincipalPointsThroughTheKeypointPose) {
   // A model keypoint at (10, 0) with angle 0 seen at (100, 100), turned 90 degrees, twice as big.
   const std::vector<cv::KeyPoint> model = {cv::KeyPoint(10.f, 0.f, 4.f, 0.f)};
