@@ -3,7 +3,6 @@
 // homography where enough well-spread inliers allow it (objects tilted out of the plane).
 #include "model_scene.hpp"
 
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
