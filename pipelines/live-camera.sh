@@ -7,9 +7,12 @@
 # MODEL is a model file (.yml) or a picture of the object; DEVICE defaults to /dev/video0.
 # Environment:
 #   CAPS    caps asked of the camera (default video/x-raw,width=640,height=480); pickdetect's
-#           cost grows with the frame size (SIFT), 640x480 runs at a few frames per second
+#           cost grows with the frame size (SIFT): full SIFT at 640x480 runs at about 12
+#           frames per second on two cores (see DETECT for more)
 #   SOURCE  replaces the camera, e.g. SOURCE="videotestsrc is-live=true" to try the pipeline
 #   SINK    replaces the display (default autovideosink), e.g. SINK=fakesink
+#   DETECT  extra pickdetect properties, e.g. the camera-rate configuration of README's Speed
+#           section: DETECT="detection-scale=0.6 min-matches=4 threads=2"
 #   PICKDETECT_BUILD_DIR=<builddir> or GST_PLUGIN_PATH=<builddir>/gst to use the uninstalled
 #           plugin
 #
@@ -19,7 +22,7 @@
 set -eu
 
 if [ $# -lt 1 ]; then
-  sed -n '3,20p' "$0" >&2
+  sed -n '3,22p' "$0" >&2
   exit 2
 fi
 model=$1
@@ -27,6 +30,7 @@ device=${2:-/dev/video0}
 caps=${CAPS:-video/x-raw,width=640,height=480}
 source=${SOURCE:-v4l2src device=$device}
 sink=${SINK:-autovideosink}
+detect=${DETECT:-}
 
 if [ -n "${PICKDETECT_BUILD_DIR:-}" ]; then
   GST_PLUGIN_PATH="$PICKDETECT_BUILD_DIR/gst${GST_PLUGIN_PATH:+:$GST_PLUGIN_PATH}"
@@ -37,8 +41,8 @@ gst-inspect-1.0 pickdetect >/dev/null 2>&1 || {
   exit 1
 }
 
-# shellcheck disable=SC2086 # $source and $sink are pipeline fragments.
+# shellcheck disable=SC2086 # $source, $detect and $sink are pipeline fragments.
 exec gst-launch-1.0 -m $source ! "$caps" ! videoconvert ! video/x-raw,format=I420 ! \
   queue leaky=downstream max-size-buffers=1 ! \
-  pickdetect model="$model" draw=true ! \
+  pickdetect model="$model" draw=true $detect ! \
   videoconvert ! $sink sync=false
