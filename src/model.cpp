@@ -25,6 +25,9 @@ namespace {
 constexpr int kMaxModelSide = 4096;
 /// Largest distance (pixels) between the alpha contour and its simplified outline.
 constexpr double kOutlineTolerancePx = 1.0;
+/// Columns of a cached descriptor matrix: SIFT's 128 floats, ORB's 32 bytes.
+constexpr int kSiftDescriptorSize = 128;
+constexpr int kOrbDescriptorSize = 32;
 
 std::string in_quotes(const std::string& path) {
   return "'" + path + "'";
@@ -173,6 +176,27 @@ void check_geometry(const Model& model, const std::string& origin) {
                 std::to_string(model.principal_points.size()) + ")");
 }
 
+/// Reads a cached descriptor matrix (`key`, one row of `cols` per keypoint) once its declared
+/// size agrees with `rows`, `cols` and its data: OpenCV allocates rows x cols before it reads the
+/// data, so a corrupt header (rows: 2147483647) would otherwise ask for gigabytes.
+cv::Mat read_descriptors(const cv::FileNode& node, size_t rows, int cols, const std::string& origin,
+                         const char* key) {
+  auto declared = [&](const char* field) {
+    const cv::FileNode n = node[field];
+    return n.isInt() ? static_cast<long long>(static_cast<int>(n)) : -1LL;
+  };
+  const long long n = static_cast<long long>(rows);
+  const bool agree = node.isMap() && declared("rows") == n &&
+                     (n == 0 || declared("cols") == cols) && node["data"].isSeq() &&
+                     static_cast<long long>(node["data"].size()) == n * declared("cols");
+  if (!agree)
+    throw Error(origin + ": the cached '" + key + "' is not a " + std::to_string(rows) + "x" +
+                std::to_string(cols) + " matrix (one row per cached keypoint)");
+  cv::Mat m;
+  node >> m;
+  return m;
+}
+
 } // namespace
 
 void compute_model_features(Model& model) {
@@ -250,10 +274,11 @@ Model load_model(const std::string& path) {
     if (!root["keypoints"].empty() && !root["descriptors"].empty()) {
       Features& sift = model.sift;
       cv::read(root["keypoints"], sift.keypoints);
-      root["descriptors"] >> sift.descriptors;
+      sift.descriptors = read_descriptors(root["descriptors"], sift.keypoints.size(),
+                                          kSiftDescriptorSize, origin, "descriptors");
       if (sift.descriptors.type() != CV_32F ||
           sift.descriptors.rows != static_cast<int>(sift.keypoints.size()) ||
-          sift.descriptors.cols != 128)
+          sift.descriptors.cols != kSiftDescriptorSize)
         throw Error(origin + ": the cached keypoints and descriptors do not agree (" +
                     std::to_string(sift.keypoints.size()) + " keypoints, " +
                     std::to_string(sift.descriptors.rows) + "x" +
@@ -263,7 +288,9 @@ Model load_model(const std::string& path) {
                     " keypoints (at least " + std::to_string(kMinModelKeypoints) + " are needed)");
       if (!root["orb_keypoints"].empty() && !root["orb_descriptors"].empty()) {
         cv::read(root["orb_keypoints"], model.orb.keypoints);
-        root["orb_descriptors"] >> model.orb.descriptors;
+        model.orb.descriptors =
+            read_descriptors(root["orb_descriptors"], model.orb.keypoints.size(),
+                             kOrbDescriptorSize, origin, "orb_descriptors");
         if (model.orb.descriptors.rows != static_cast<int>(model.orb.keypoints.size()) ||
             (!model.orb.descriptors.empty() && model.orb.descriptors.type() != CV_8U))
           throw Error(origin + ": the cached ORB keypoints and descriptors do not agree");

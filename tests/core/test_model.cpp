@@ -136,3 +136,19 @@ TEST_F(ModelFiles, HugePictureIsRefusedWithItsSize) {
   cv::imwrite(path("huge.png"), cv::Mat(5000, 4200, CV_8UC1, cv::Scalar(0)));
   expect_refused(path("huge.png"), {path("huge.png"), "4200x5000"});
 }
+
+// Found by fuzz-model: a cached matrix whose header claims more rows than the file holds made
+// OpenCV allocate them all (16 GiB for rows: 2147483647) before it read the data.
+TEST_F(ModelFiles, CachedDescriptorsWithAFalseSizeAreRefusedBeforeReading) {
+  Model m = load_model(kData + "/box.png");
+  save_model(m, path("cached.yml"), true);
+  std::ifstream in(path("cached.yml"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string rows = "rows: " + std::to_string(m.sift.keypoints.size());
+  const size_t at = text.find(rows, text.find("\ndescriptors:"));
+  ASSERT_NE(at, std::string::npos) << "no '" << rows << "' in the saved descriptors";
+  text.replace(at, rows.size(), "rows: 2147483647");
+  expect_refused(
+      write("liar.yml", text),
+      {path("liar.yml"), "'descriptors'", std::to_string(m.sift.keypoints.size()) + "x128 matrix"});
+}
