@@ -14,6 +14,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <utility>
 
 namespace fs = std::filesystem;
 
@@ -59,16 +61,58 @@ bool is_model_file(const std::string& path) {
   return ext == ".yml" || ext == ".yaml" || ext == ".xml" || ext == ".json";
 }
 
+/// The size a PNG or JPEG file declares in its header, read without decoding the picture; none
+/// for other formats or a header that does not say (the decoder decides then).
+std::optional<std::pair<long, long>> declared_size(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char b[24] = {};
+  in.read(reinterpret_cast<char*>(b), sizeof b);
+  auto be16 = [](const unsigned char* p) { return long{p[0]} << 8 | p[1]; };
+  auto be32 = [&](const unsigned char* p) { return be16(p) << 16 | be16(p + 2); };
+  // PNG: the 8-byte signature, then the IHDR chunk: length, "IHDR", width, height.
+  if (in && std::memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0 && std::memcmp(b + 12, "IHDR", 4) == 0)
+    return std::make_pair(be32(b + 16), be32(b + 20));
+  if (b[0] != 0xFF || b[1] != 0xD8)
+    return std::nullopt;
+  // JPEG: segments (0xFF, marker, 2-byte length) up to a start of frame, SOF0-SOF15 but for
+  // DHT (C4), JPG (C8) and DAC (CC): precision, height, width. 0xFF before a marker is fill.
+  in.clear();
+  in.seekg(2);
+  unsigned char m[9];
+  while (in.read(reinterpret_cast<char*>(m), 4) && m[0] == 0xFF && m[1] != 0xDA) {
+    if (m[1] == 0xFF) {
+      in.seekg(-3, std::ios::cur);
+      continue;
+    }
+    const bool sof = m[1] >= 0xC0 && m[1] <= 0xCF && m[1] != 0xC4 && m[1] != 0xC8 && m[1] != 0xCC;
+    if (sof && in.read(reinterpret_cast<char*>(m + 4), 5))
+      return std::make_pair(be16(m + 7), be16(m + 5));
+    if (sof || be16(m + 2) < 2)
+      break;
+    in.seekg(be16(m + 2) - 2, std::ios::cur);
+  }
+  return std::nullopt;
+}
+
+/// Throws when a picture of cols x rows is too large for a model.
+void require_model_size(const std::string& path, long cols, long rows) {
+  if (cols > kMaxModelSide || rows > kMaxModelSide)
+    throw Error("model picture " + in_quotes(path) + " is " + std::to_string(cols) + "x" +
+                std::to_string(rows) + " pixels, larger than the " + std::to_string(kMaxModelSide) +
+                "-pixel side a model may have");
+}
+
 void load_picture(Model& model) {
   require_readable(model.image_path, "model picture");
+  // Refused before decoding when the header tells: a flat 30000 x 30000 PNG is small on disk
+  // but would take gigabytes decoded.
+  if (const auto size = declared_size(model.image_path))
+    require_model_size(model.image_path, size->first, size->second);
   cv::Mat raw = cv::imread(model.image_path, cv::IMREAD_UNCHANGED);
   if (raw.empty())
     throw Error("model picture " + in_quotes(model.image_path) +
                 " cannot be decoded as a picture (unknown or corrupt format)");
-  if (raw.cols > kMaxModelSide || raw.rows > kMaxModelSide)
-    throw Error("model picture " + in_quotes(model.image_path) + " is " + std::to_string(raw.cols) +
-                "x" + std::to_string(raw.rows) + " pixels, larger than the " +
-                std::to_string(kMaxModelSide) + "-pixel side a model may have");
+  require_model_size(model.image_path, raw.cols, raw.rows);
   if (raw.depth() != CV_8U) {
     double lo = 0, hi = 0;
     cv::minMaxLoc(raw.reshape(1), &lo, &hi);

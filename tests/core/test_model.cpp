@@ -152,3 +152,15 @@ TEST_F(ModelFiles, CachedDescriptorsWithAFalseSizeAreRefusedBeforeReading) {
       write("liar.yml", text),
       {path("liar.yml"), "'descriptors'", std::to_string(m.sift.keypoints.size()) + "x128 matrix"});
 }
+
+// Only the header: the picture is refused for the size it declares, before any decoding (which
+// would fail on the missing data, or take gigabytes for a real 30000 x 30000 picture).
+TEST_F(ModelFiles, HugePictureIsRefusedFromItsHeaderBeforeDecoding) {
+  const std::string png_header(
+      "\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x75\x30\0\0\x75\x30\x08\0\0\0\0", 29);
+  expect_refused(write("huge-header.png", png_header), {path("huge-header.png"), "30000x30000"});
+  // A JPEG with a comment segment, one fill byte, then a start of frame (SOF2) of 20000 x 30000.
+  const std::string jpeg_header(
+      "\xFF\xD8\xFF\xFE\0\x05hi!\xFF\xFF\xC2\0\x11\x08\x75\x30\x4E\x20\x03", 20);
+  expect_refused(write("huge-header.jpg", jpeg_header), {path("huge-header.jpg"), "20000x30000"});
+}
