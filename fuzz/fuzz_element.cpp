@@ -22,8 +22,15 @@ namespace {
 const char* const kFormats[] = {"GRAY8", "RGB",  "BGR",  "RGBx", "BGRx", "xRGB", "xBGR", "RGBA",
                                 "BGRA",  "ARGB", "ABGR", "I420", "YV12", "NV12", "NV21"};
 
-GstHarness* harness() {
-  static GstHarness* h = [] {
+/// The harness and the pickdetect element in it: gst_harness_new_parse puts the element in a
+/// bin (h->element), and the properties are the element's.
+struct Harness {
+  GstHarness* h;
+  GstElement* pickdetect;
+};
+
+const Harness& harness() {
+  static const Harness harness = [] {
     gst_init(nullptr, nullptr);
     GError* error = nullptr;
     GstPlugin* plugin = gst_plugin_load_file(FUZZ_PLUGIN, &error);
@@ -32,17 +39,20 @@ GstHarness* harness() {
       std::abort();
     }
     gst_object_unref(plugin);
-    GstHarness* harness = gst_harness_new_parse(
+    GstHarness* h = gst_harness_new_parse(
         ("pickdetect model=" + fuzz::work_dir() + "/small.png draw=true").c_str());
-    return harness;
+    GstElement* pickdetect = gst_harness_find_element(h, "pickdetect");
+    if (!pickdetect)
+      std::abort();
+    return Harness{h, pickdetect};
   }();
-  return h;
+  return harness;
 }
 
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  GstHarness* h = harness();
+  GstHarness* h = harness().h;
   fuzz::Input in(data, size);
   const char* format = kFormats[in.range(0, G_N_ELEMENTS(kFormats) - 1)];
   const int width = in.range(1, 160), height = in.range(1, 120);
@@ -64,7 +74,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                            ",width=" + std::to_string(width) + ",height=" + std::to_string(height) +
                            ",framerate=30/1";
   gst_harness_set_src_caps_str(h, caps.c_str());
-  g_object_set(h->element, "max-instances", in.range(0, 3), "allow-scale", in.byte() & 1, nullptr);
+  g_object_set(harness().pickdetect, "max-instances", in.range(0, 3), "allow-scale", in.byte() & 1,
+               nullptr);
 
   GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
   GstMapInfo map;

@@ -18,7 +18,8 @@ ninja -C "$build"
 
 targets=("$@")
 [ ${#targets[@]} -eq 0 ] && targets=(fuzz-model fuzz-detect fuzz-element)
-export ASAN_OPTIONS=halt_on_error=1:detect_leaks=1:allocator_may_return_null=1
+# fast_unwind_on_malloc=0: whole allocation stacks through GLib, for lsan.supp (see there).
+export ASAN_OPTIONS=halt_on_error=1:detect_leaks=1:allocator_may_return_null=1:fast_unwind_on_malloc=0
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp:print_suppressions=0"
 export GST_REGISTRY_FORK=no
@@ -28,7 +29,8 @@ for t in "${targets[@]}"; do
   name=${t#fuzz-}
   mkdir -p "$build/corpus/$name" "$build/artifacts/$name"
   echo "== $t: $seconds s" >&2
-  # -rss_limit_mb: a model picture may be up to 4096 x 4096, decoded before it is checked.
+  # -rss_limit_mb: a model picture may be up to 4096 x 4096; PNG and JPEG pictures are checked
+  # from their header, other formats once decoded.
   if "$build/fuzz/$t" -max_total_time="$seconds" -timeout=30 -rss_limit_mb=3072 \
       -max_len=65536 -print_final_stats=1 -artifact_prefix="$build/artifacts/$name/" \
       "$build/corpus/$name" "fuzz/corpus/$name" 2>"$build/$t.log"; then

@@ -14,6 +14,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <utility>
 
 namespace fs = std::filesystem;
 
@@ -25,6 +27,9 @@ namespace {
 constexpr int kMaxModelSide = 4096;
 /// Largest distance (pixels) between the alpha contour and its simplified outline.
 constexpr double kOutlineTolerancePx = 1.0;
+/// Columns of a cached descriptor matrix: SIFT's 128 floats, ORB's 32 bytes.
+constexpr int kSiftDescriptorSize = 128;
+constexpr int kOrbDescriptorSize = 32;
 
 std::string in_quotes(const std::string& path) {
   return "'" + path + "'";
@@ -56,16 +61,58 @@ bool is_model_file(const std::string& path) {
   return ext == ".yml" || ext == ".yaml" || ext == ".xml" || ext == ".json";
 }
 
+/// The size a PNG or JPEG file declares in its header, read without decoding the picture; none
+/// for other formats or a header that does not say (the decoder decides then).
+std::optional<std::pair<long, long>> declared_size(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  unsigned char b[24] = {};
+  in.read(reinterpret_cast<char*>(b), sizeof b);
+  auto be16 = [](const unsigned char* p) { return long{p[0]} << 8 | p[1]; };
+  auto be32 = [&](const unsigned char* p) { return be16(p) << 16 | be16(p + 2); };
+  // PNG: the 8-byte signature, then the IHDR chunk: length, "IHDR", width, height.
+  if (in && std::memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0 && std::memcmp(b + 12, "IHDR", 4) == 0)
+    return std::make_pair(be32(b + 16), be32(b + 20));
+  if (b[0] != 0xFF || b[1] != 0xD8)
+    return std::nullopt;
+  // JPEG: segments (0xFF, marker, 2-byte length) up to a start of frame, SOF0-SOF15 but for
+  // DHT (C4), JPG (C8) and DAC (CC): precision, height, width. 0xFF before a marker is fill.
+  in.clear();
+  in.seekg(2);
+  unsigned char m[9];
+  while (in.read(reinterpret_cast<char*>(m), 4) && m[0] == 0xFF && m[1] != 0xDA) {
+    if (m[1] == 0xFF) {
+      in.seekg(-3, std::ios::cur);
+      continue;
+    }
+    const bool sof = m[1] >= 0xC0 && m[1] <= 0xCF && m[1] != 0xC4 && m[1] != 0xC8 && m[1] != 0xCC;
+    if (sof && in.read(reinterpret_cast<char*>(m + 4), 5))
+      return std::make_pair(be16(m + 7), be16(m + 5));
+    if (sof || be16(m + 2) < 2)
+      break;
+    in.seekg(be16(m + 2) - 2, std::ios::cur);
+  }
+  return std::nullopt;
+}
+
+/// Throws when a picture of cols x rows is too large for a model.
+void require_model_size(const std::string& path, long cols, long rows) {
+  if (cols > kMaxModelSide || rows > kMaxModelSide)
+    throw Error("model picture " + in_quotes(path) + " is " + std::to_string(cols) + "x" +
+                std::to_string(rows) + " pixels, larger than the " + std::to_string(kMaxModelSide) +
+                "-pixel side a model may have");
+}
+
 void load_picture(Model& model) {
   require_readable(model.image_path, "model picture");
+  // Refused before decoding when the header tells: a flat 30000 x 30000 PNG is small on disk
+  // but would take gigabytes decoded.
+  if (const auto size = declared_size(model.image_path))
+    require_model_size(model.image_path, size->first, size->second);
   cv::Mat raw = cv::imread(model.image_path, cv::IMREAD_UNCHANGED);
   if (raw.empty())
     throw Error("model picture " + in_quotes(model.image_path) +
                 " cannot be decoded as a picture (unknown or corrupt format)");
-  if (raw.cols > kMaxModelSide || raw.rows > kMaxModelSide)
-    throw Error("model picture " + in_quotes(model.image_path) + " is " + std::to_string(raw.cols) +
-                "x" + std::to_string(raw.rows) + " pixels, larger than the " +
-                std::to_string(kMaxModelSide) + "-pixel side a model may have");
+  require_model_size(model.image_path, raw.cols, raw.rows);
   if (raw.depth() != CV_8U) {
     double lo = 0, hi = 0;
     cv::minMaxLoc(raw.reshape(1), &lo, &hi);
@@ -173,6 +220,27 @@ void check_geometry(const Model& model, const std::string& origin) {
                 std::to_string(model.principal_points.size()) + ")");
 }
 
+/// Reads a cached descriptor matrix (`key`, one row of `cols` per keypoint) once its declared
+/// size agrees with `rows`, `cols` and its data: OpenCV allocates rows x cols before it reads the
+/// data, so a corrupt header (rows: 2147483647) would otherwise ask for gigabytes.
+cv::Mat read_descriptors(const cv::FileNode& node, size_t rows, int cols, const std::string& origin,
+                         const char* key) {
+  auto declared = [&](const char* field) {
+    const cv::FileNode n = node[field];
+    return n.isInt() ? static_cast<long long>(static_cast<int>(n)) : -1LL;
+  };
+  const long long n = static_cast<long long>(rows);
+  const bool agree = node.isMap() && declared("rows") == n &&
+                     (n == 0 || declared("cols") == cols) && node["data"].isSeq() &&
+                     static_cast<long long>(node["data"].size()) == n * declared("cols");
+  if (!agree)
+    throw Error(origin + ": the cached '" + key + "' is not a " + std::to_string(rows) + "x" +
+                std::to_string(cols) + " matrix (one row per cached keypoint)");
+  cv::Mat m;
+  node >> m;
+  return m;
+}
+
 } // namespace
 
 void compute_model_features(Model& model) {
@@ -250,10 +318,11 @@ Model load_model(const std::string& path) {
     if (!root["keypoints"].empty() && !root["descriptors"].empty()) {
       Features& sift = model.sift;
       cv::read(root["keypoints"], sift.keypoints);
-      root["descriptors"] >> sift.descriptors;
+      sift.descriptors = read_descriptors(root["descriptors"], sift.keypoints.size(),
+                                          kSiftDescriptorSize, origin, "descriptors");
       if (sift.descriptors.type() != CV_32F ||
           sift.descriptors.rows != static_cast<int>(sift.keypoints.size()) ||
-          sift.descriptors.cols != 128)
+          sift.descriptors.cols != kSiftDescriptorSize)
         throw Error(origin + ": the cached keypoints and descriptors do not agree (" +
                     std::to_string(sift.keypoints.size()) + " keypoints, " +
                     std::to_string(sift.descriptors.rows) + "x" +
@@ -263,7 +332,9 @@ Model load_model(const std::string& path) {
                     " keypoints (at least " + std::to_string(kMinModelKeypoints) + " are needed)");
       if (!root["orb_keypoints"].empty() && !root["orb_descriptors"].empty()) {
         cv::read(root["orb_keypoints"], model.orb.keypoints);
-        root["orb_descriptors"] >> model.orb.descriptors;
+        model.orb.descriptors =
+            read_descriptors(root["orb_descriptors"], model.orb.keypoints.size(),
+                             kOrbDescriptorSize, origin, "orb_descriptors");
         if (model.orb.descriptors.rows != static_cast<int>(model.orb.keypoints.size()) ||
             (!model.orb.descriptors.empty() && model.orb.descriptors.type() != CV_8U))
           throw Error(origin + ": the cached ORB keypoints and descriptors do not agree");

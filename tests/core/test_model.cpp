@@ -136,3 +136,31 @@ TEST_F(ModelFiles, HugePictureIsRefusedWithItsSize) {
   cv::imwrite(path("huge.png"), cv::Mat(5000, 4200, CV_8UC1, cv::Scalar(0)));
   expect_refused(path("huge.png"), {path("huge.png"), "4200x5000"});
 }
+
+// Found by fuzz-model: a cached matrix whose header claims more rows than the file holds made
+// OpenCV allocate them all (16 GiB for rows: 2147483647) before it read the data.
+TEST_F(ModelFiles, CachedDescriptorsWithAFalseSizeAreRefusedBeforeReading) {
+  Model m = load_model(kData + "/box.png");
+  save_model(m, path("cached.yml"), true);
+  std::ifstream in(path("cached.yml"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string rows = "rows: " + std::to_string(m.sift.keypoints.size());
+  const size_t at = text.find(rows, text.find("\ndescriptors:"));
+  ASSERT_NE(at, std::string::npos) << "no '" << rows << "' in the saved descriptors";
+  text.replace(at, rows.size(), "rows: 2147483647");
+  expect_refused(
+      write("liar.yml", text),
+      {path("liar.yml"), "'descriptors'", std::to_string(m.sift.keypoints.size()) + "x128 matrix"});
+}
+
+// Only the header: the picture is refused for the size it declares, before any decoding (which
+// would fail on the missing data, or take gigabytes for a real 30000 x 30000 picture).
+TEST_F(ModelFiles, HugePictureIsRefusedFromItsHeaderBeforeDecoding) {
+  const std::string png_header(
+      "\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x75\x30\0\0\x75\x30\x08\0\0\0\0", 29);
+  expect_refused(write("huge-header.png", png_header), {path("huge-header.png"), "30000x30000"});
+  // A JPEG with a comment segment, one fill byte, then a start of frame (SOF2) of 20000 x 30000.
+  const std::string jpeg_header(
+      "\xFF\xD8\xFF\xFE\0\x05hi!\xFF\xFF\xC2\0\x11\x08\x75\x30\x4E\x20\x03", 20);
+  expect_refused(write("huge-header.jpg", jpeg_header), {path("huge-header.jpg"), "20000x30000"});
+}
