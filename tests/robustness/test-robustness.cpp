@@ -15,6 +15,8 @@
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/video/video.h>
 
+#include "../common/harness.hpp"
+
 #include <atomic>
 #include <cerrno>
 #include <cmath>
@@ -175,12 +177,8 @@ std::string caps_string(const char* format, int width, int height) {
 
 /// A harness around a lone pickdetect with the box model and a bus of its own.
 GstHarness* pickdetect_harness(GstBus** bus, bool draw = false) {
-  GstElement* element = gst_element_factory_make("pickdetect", nullptr);
-  fail_unless(element != nullptr, "pickdetect not found: is GST_PLUGIN_PATH set?");
-  gst_object_ref_sink(element);
-  g_object_set(element, "model", kBoxPath.c_str(), "draw", draw, nullptr);
-  GstHarness* h = gst_harness_new_with_element(element, "sink", "src");
-  gst_object_unref(element);
+  GstHarness* h = pickdetect::test_harness::pickdetect_harness("model", kBoxPath.c_str(), "draw",
+                                                               static_cast<gboolean>(draw));
   *bus = gst_bus_new();
   gst_element_set_bus(h->element, *bus);
   return h;
