@@ -2,7 +2,7 @@
 # Soak: 10,000 frames (320x240, OpenCV's box.png at scale 0.5 on noise, a new buffer each frame)
 # through appsrc ! videoconvert ! pickdetect ! fakesink. Prints the resident memory after the
 # first 500 frames and at the end, each taken after malloc_trim (what glibc keeps free in its
-# arenas is not counted: it reaches its plateau after the first 500 frames), and PASS when it
+# arenas is not counted: it grows to a plateau over the first thousand frames), and PASS when it
 # grew by at most 5 % (exit status 0). Arguments go to pickdetect-soak (--frames N --baseline N
 # --size WxH --scale S --tolerance F --every N; --every prints the trimmed and untrimmed RSS and
 # glibc's malloc figures every N frames).
