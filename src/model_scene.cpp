@@ -46,6 +46,14 @@ std::vector<cv::Point2f> scene_points(const ModelScene& ms, const std::vector<in
   return out;
 }
 
+std::vector<cv::Point2f> model_points(const ModelScene& ms, const std::vector<int>& idx) {
+  std::vector<cv::Point2f> out;
+  out.reserve(idx.size());
+  for (int i : idx)
+    out.push_back(ms.model_keypoints[ms.matches[i].model_point].pt);
+  return out;
+}
+
 std::vector<Cluster> centre_clusters(const ModelScene& ms) {
   std::vector<cv::Point2f> centres;
   centres.reserve(ms.votes.size());

@@ -35,6 +35,8 @@ void place(Instance& inst, const Model& model, const cv::Matx33d& h);
 
 /// Scene positions of the given matches' scene keypoints.
 std::vector<cv::Point2f> scene_points(const ModelScene& ms, const std::vector<int>& idx);
+/// Model positions of the given matches' model keypoints.
+std::vector<cv::Point2f> model_points(const ModelScene& ms, const std::vector<int>& idx);
 
 /// Mean-shift clusters of the centre votes, strongest first.
 std::vector<Cluster> centre_clusters(const ModelScene& ms);

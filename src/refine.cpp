@@ -30,30 +30,32 @@ constexpr double kMinPerspectiveSpread = 0.2;
 /// smaller side from where the similarity puts it.
 constexpr double kMaxPerspectiveShift = 0.15;
 
-/// Matches (indices into ms.matches, not yet claimed) consistent with a pose.
-std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, bool allow_scale,
-                            const std::vector<char>& claimed) {
+/// Matches (indices into ms.matches, not yet claimed) consistent with a pose: `map` (the pose
+/// itself, or a homography close to it) carries the model keypoint to within the inlier distance
+/// of the scene keypoint, and the match's own rotation (and, with allow_scale, size ratio)
+/// agrees with the pose's.
+std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, const cv::Matx33d& map,
+                            bool allow_scale, const std::vector<char>& claimed) {
   const double tol = std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * pose.scale);
-  const cv::Matx33d map = to_matrix(pose);
   std::vector<int> in;
   for (size_t i = 0; i < ms.matches.size(); ++i) {
     if (claimed[i])
       continue;
+    const Vote& v = ms.votes[i];
+    if (angle_difference(v.angle, pose.angle) > kInlierAngleDeg)
+      continue;
+    if (allow_scale && (v.scale / pose.scale > kInlierScaleFactor ||
+                        v.scale / pose.scale < 1.0 / kInlierScaleFactor))
+      continue;
     const Match& m = ms.matches[i];
     const cv::Point2f model = ms.model_keypoints[m.model_point].pt;
+    const cv::Vec3d p = map * cv::Vec3d(model.x, model.y, 1.0);
+    if (!(p[2] > 0.0)) // Behind the camera: no inlier.
+      continue;
     const cv::Point2f seen = ms.scene_keypoints[m.scene_point].pt;
-    const double dx = map(0, 0) * model.x + map(0, 1) * model.y + map(0, 2) - seen.x;
-    const double dy = map(1, 0) * model.x + map(1, 1) * model.y + map(1, 2) - seen.y;
-    if (dx * dx + dy * dy > tol * tol)
-      continue;
-    if (angle_difference(ms.votes[i].angle, pose.angle) > kInlierAngleDeg)
-      continue;
-    if (allow_scale) {
-      const double r = ms.votes[i].scale / pose.scale;
-      if (r > kInlierScaleFactor || r < 1.0 / kInlierScaleFactor)
-        continue;
-    }
-    in.push_back(static_cast<int>(i));
+    const double dx = p[0] / p[2] - seen.x, dy = p[1] / p[2] - seen.y;
+    if (dx * dx + dy * dy <= tol * tol)
+      in.push_back(static_cast<int>(i));
   }
   return in;
 }
@@ -63,17 +65,12 @@ std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, bool a
 /// Refits the pose on its own inlier matches until the inlier set settles.
 std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,
                              const std::vector<char>& claimed) {
-  std::vector<int> in = inliers_of(ms, pose, allow_scale, claimed);
+  std::vector<int> in = inliers_of(ms, pose, to_matrix(pose), allow_scale, claimed);
   for (int round = 0; round < kRefineRounds && in.size() >= 2; ++round) {
-    std::vector<cv::Point2f> from, to;
-    for (int i : in) {
-      from.push_back(ms.model_keypoints[ms.matches[i].model_point].pt);
-      to.push_back(ms.scene_keypoints[ms.matches[i].scene_point].pt);
-    }
     Similarity next;
-    if (!fit_similarity(from, to, allow_scale, next))
+    if (!fit_similarity(model_points(ms, in), scene_points(ms, in), allow_scale, next))
       break;
-    std::vector<int> again = inliers_of(ms, next, allow_scale, claimed);
+    std::vector<int> again = inliers_of(ms, next, to_matrix(next), allow_scale, claimed);
     if (again.size() < 2)
       break;
     pose = next;
@@ -90,29 +87,19 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
                         const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h) {
   if (in.size() < kMinPerspectiveMatches)
     return false;
-  auto model_point = [&](int i) { return ms.model_keypoints[ms.matches[i].model_point].pt; };
-  auto scene_point = [&](int i) { return ms.scene_keypoints[ms.matches[i].scene_point].pt; };
   {
-    std::vector<cv::Point2f> spread, hull;
-    for (int i : in)
-      spread.push_back(model_point(i));
-    cv::convexHull(spread, hull);
+    std::vector<cv::Point2f> hull;
+    cv::convexHull(model_points(ms, in), hull);
     if (cv::contourArea(hull) < kMinPerspectiveSpread * std::abs(cv::contourArea(ms.model.outline)))
       return false;
   }
   const double side = model_side(ms.model) * pose.scale;
-  const double tol = std::max(kMinInlierPx, kInlierShare * side);
   const std::vector<cv::Point2f> similar = pose.apply(ms.model.outline);
   std::vector<int> current = in;
   bool found = false;
   cv::Matx33d candidate = to_matrix(pose);
   for (int round = 0; round < kRefineRounds; ++round) {
-    std::vector<cv::Point2f> from, to;
-    for (int i : current) {
-      from.push_back(model_point(i));
-      to.push_back(scene_point(i));
-    }
-    if (!fit_homography(from, to, candidate, candidate))
+    if (!fit_homography(model_points(ms, current), scene_points(ms, current), candidate, candidate))
       break;
     std::vector<cv::Point2f> outline;
     cv::perspectiveTransform(ms.model.outline, outline, cv::Mat(candidate));
@@ -121,25 +108,7 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
       close = cv::norm(outline[k] - similar[k]) <= kMaxPerspectiveShift * side;
     if (!close)
       break;
-    std::vector<int> again;
-    for (size_t i = 0; i < ms.matches.size(); ++i) {
-      if (claimed[i])
-        continue;
-      const Vote& v = ms.votes[i];
-      if (angle_difference(v.angle, pose.angle) > kInlierAngleDeg)
-        continue;
-      if (allow_scale && (v.scale / pose.scale > kInlierScaleFactor ||
-                          v.scale / pose.scale < 1.0 / kInlierScaleFactor))
-        continue;
-      const cv::Point2f m = model_point(static_cast<int>(i));
-      const cv::Vec3d p = candidate * cv::Vec3d(m.x, m.y, 1.0);
-      if (!(p[2] > 0.0)) // Behind the camera: no inlier.
-        continue;
-      const cv::Point2f seen = scene_point(static_cast<int>(i));
-      const double dx = p[0] / p[2] - seen.x, dy = p[1] / p[2] - seen.y;
-      if (dx * dx + dy * dy <= tol * tol)
-        again.push_back(static_cast<int>(i));
-    }
+    std::vector<int> again = inliers_of(ms, pose, candidate, allow_scale, claimed);
     if (again.size() < kMinPerspectiveMatches)
       break;
     h = candidate;
