@@ -94,7 +94,6 @@ std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
     unit[k] = cv::Point2d(std::cos(r), std::sin(r));
   }
   std::vector<double> modes;
-  std::vector<int> support;
   // Seeds: the first vote of each occupied bin of half a bandwidth (bin seeding, as for the
   // centres), at most 36 climbs however many votes the cluster has.
   constexpr int kBins = static_cast<int>(720.0 / kRotationBandwidthDeg) + 1;
@@ -105,12 +104,11 @@ std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
       continue;
     seeded[bin] = 1;
     double at = ms.votes[seed].angle;
-    int n = 0;
     for (int it = 0; it < 50; ++it) {
       const double r = at * CV_PI / 180.0;
       const cv::Point2d dir(std::cos(r), std::sin(r));
       double sx = 0.0, sy = 0.0;
-      n = 0;
+      int n = 0;
       for (const cv::Point2d& u : unit)
         if (u.dot(dir) >= window) {
           sx += u.x;
@@ -129,10 +127,8 @@ std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
     const bool known = std::any_of(modes.begin(), modes.end(), [&](double m) {
       return angle_difference(m, at) < kRotationBandwidthDeg;
     });
-    if (!known) {
+    if (!known)
       modes.push_back(at);
-      support.push_back(n);
-    }
   }
   std::vector<std::vector<int>> groups(modes.size());
   for (int i : members) {
