@@ -5,6 +5,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 
 namespace pickdetect {
@@ -55,28 +56,46 @@ std::vector<cv::Point2f> Similarity::apply(const std::vector<cv::Point2f>& point
 }
 
 bool fit_similarity(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
-                    bool allow_scale, Similarity& out) {
+                    bool allow_scale, Similarity& out, const std::vector<double>& weights) {
+  // Umeyama's closed form in the plane, with weights (Eigen::umeyama has none): weighted
+  // centroids, then the rotation and scale from the weighted cross-covariance.
   const size_t n = from.size();
-  if (n < 2 || to.size() != n)
+  if (n < 2 || to.size() != n || (!weights.empty() && weights.size() != n))
     return false;
-  Eigen::MatrixXd src(2, n), dst(2, n);
+  auto weight = [&](size_t i) { return weights.empty() ? 1.0 : weights[i]; };
+  double total = 0.0;
+  Eigen::Vector2d mean_from = Eigen::Vector2d::Zero(), mean_to = Eigen::Vector2d::Zero();
   for (size_t i = 0; i < n; ++i) {
-    src.col(i) << from[i].x, from[i].y;
-    dst.col(i) << to[i].x, to[i].y;
+    const double w = weight(i);
+    if (!(w >= 0.0))
+      return false;
+    total += w;
+    mean_from += w * Eigen::Vector2d(from[i].x, from[i].y);
+    mean_to += w * Eigen::Vector2d(to[i].x, to[i].y);
   }
-  const Eigen::VectorXd spread = (src.colwise() - src.rowwise().mean()).rowwise().norm();
-  if (spread.norm() < 1e-6)
+  if (!(total > 0.0))
     return false;
-  const Eigen::MatrixXd t = Eigen::umeyama(src, dst, allow_scale);
-  if (!t.allFinite())
+  mean_from /= total;
+  mean_to /= total;
+  double dot = 0.0, cross = 0.0, spread = 0.0;
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d x = Eigen::Vector2d(from[i].x, from[i].y) - mean_from;
+    const Eigen::Vector2d y = Eigen::Vector2d(to[i].x, to[i].y) - mean_to;
+    const double w = weight(i);
+    dot += w * x.dot(y);
+    cross += w * (x.x() * y.y() - x.y() * y.x());
+    spread += w * x.squaredNorm();
+  }
+  if (!(spread > 1e-12 * total))
     return false;
-  const Eigen::Matrix2d a = t.topLeftCorner(2, 2);
-  const double scale = std::sqrt(std::abs(a.determinant()));
-  if (!(scale > 1e-9) || a.determinant() < 0.0)
+  const double scale = allow_scale ? std::hypot(dot, cross) / spread : 1.0;
+  if (!(scale > 1e-9) || !std::isfinite(scale))
     return false;
+  const double angle = std::atan2(cross, dot);
+  const Eigen::Vector2d t = mean_to - scale * (Eigen::Rotation2Dd(angle) * mean_from);
   out.scale = scale;
-  out.angle = wrap_degrees(std::atan2(a(1, 0), a(0, 0)) * 180.0 / CV_PI);
-  out.translation = cv::Point2d(t(0, 2), t(1, 2));
+  out.angle = wrap_degrees(angle * 180.0 / CV_PI);
+  out.translation = cv::Point2d(t.x(), t.y());
   return true;
 }
 
@@ -87,9 +106,12 @@ cv::Matx33d to_matrix(const Similarity& pose) {
 }
 
 bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
-                    const cv::Matx33d& initial, cv::Matx33d& out) {
+                    const cv::Matx33d& initial, cv::Matx33d& out,
+                    const std::vector<double>& weights) {
   const size_t n = from.size();
-  if (n < 4 || to.size() != n)
+  if (n < 4 || to.size() != n || (!weights.empty() && weights.size() != n))
+    return false;
+  if (std::any_of(weights.begin(), weights.end(), [](double w) { return !(w >= 0.0); }))
     return false;
   // In normalised coordinates the eight unknowns have comparable sizes, so the normal
   // equations stay well conditioned; the residuals are scaled by the scene's factor only.
@@ -121,8 +143,9 @@ bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::
       j << px / w, py / w, 1.0 / w, 0.0, 0.0, 0.0, -u * px / w, -u * py / w, //
           0.0, 0.0, 0.0, px / w, py / w, 1.0 / w, -v * px / w, -v * py / w;
       const Eigen::Vector2d r(u - y[i].x(), v - y[i].y());
-      jtj.noalias() += j.transpose() * j;
-      jtr.noalias() += j.transpose() * r;
+      const double wt = weights.empty() ? 1.0 : weights[i];
+      jtj.noalias() += wt * j.transpose() * j;
+      jtr.noalias() += wt * j.transpose() * r;
     }
     const Eigen::LDLT<Eigen::Matrix<double, 8, 8>> solver(jtj);
     // A (near) zero pivot: the points do not fix the eight unknowns (collinear, repeated).

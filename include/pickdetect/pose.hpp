@@ -19,16 +19,20 @@ struct Similarity {
 };
 
 /// Least-squares similarity (or, without allow_scale, rigid transform) that carries `from`
-/// onto `to` (Umeyama). Needs two points or more; returns false when the fit is degenerate.
+/// onto `to` (Umeyama's closed form), each pair's squared distance counted `weights[i]` times
+/// (all once when `weights` is empty). Needs two points or more; returns false when the fit is
+/// degenerate or a weight is negative.
 bool fit_similarity(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
-                    bool allow_scale, Similarity& out);
+                    bool allow_scale, Similarity& out, const std::vector<double>& weights = {});
 
 /// Homography that carries `from` onto `to` with the least squared distance in `to`'s pixels
 /// (Gauss-Newton on the eight free entries, in normalised coordinates), starting from `initial`,
-/// which must already be close (e.g. a similarity fitted on the same points). Needs four points
-/// or more; returns false when the fit is degenerate or does not converge.
+/// which must already be close (e.g. a similarity fitted on the same points). Each pair's squared
+/// distance counts `weights[i]` times (all once when `weights` is empty). Needs four points or
+/// more; returns false when the fit is degenerate or does not converge.
 bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
-                    const cv::Matx33d& initial, cv::Matx33d& out);
+                    const cv::Matx33d& initial, cv::Matx33d& out,
+                    const std::vector<double>& weights = {});
 
 /// The similarity as a 3x3 matrix.
 cv::Matx33d to_matrix(const Similarity& pose);

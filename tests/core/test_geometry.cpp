@@ -95,6 +95,40 @@ TEST(Pose, FitHomographyRecoversATiltFromANearbySimilarity) {
   EXPECT_FALSE(fit_homography(line, line, cv::Matx33d::eye(), unused));
 }
 
+TEST(Pose, WeightsDecideHowMuchEachPairCounts) {
+  const Similarity truth{-25.0, 0.9, {300.0, 120.0}};
+  const std::vector<cv::Point2f> from = {{0, 0},    {200, 0},  {200, 120}, {0, 120},
+                                         {100, 60}, {50, 100}, {150, 20}};
+  std::vector<cv::Point2f> to = truth.apply(from);
+  to.back() += cv::Point2f(4.f, -3.f); // One pair off by 5 px.
+  std::vector<double> weights(from.size(), 1.0);
+  weights.back() = 0.0;
+
+  Similarity plain, weighted;
+  ASSERT_TRUE(fit_similarity(from, to, true, plain));
+  ASSERT_TRUE(fit_similarity(from, to, true, weighted, weights));
+  EXPECT_GT(cv::norm(plain.translation - truth.translation), 0.1);
+  EXPECT_NEAR(weighted.angle, 335.0, 1e-4); // Float points: about 1e-6 off.
+  EXPECT_NEAR(weighted.scale, 0.9, 1e-6);
+  EXPECT_NEAR(cv::norm(weighted.translation - truth.translation), 0.0, 1e-4);
+
+  cv::Matx33d h;
+  ASSERT_TRUE(fit_homography(from, to, to_matrix(plain), h, weights));
+  std::vector<cv::Point2f> mapped;
+  cv::perspectiveTransform(from, mapped, cv::Mat(h));
+  const std::vector<cv::Point2f> exact = truth.apply(from);
+  for (size_t i = 0; i < from.size(); ++i)
+    EXPECT_LT(cv::norm(mapped[i] - exact[i]), 1e-3) << "point " << i;
+
+  // Weights must be one per pair and none negative.
+  weights.back() = -1.0;
+  EXPECT_FALSE(fit_similarity(from, to, true, weighted, weights));
+  EXPECT_FALSE(fit_homography(from, to, to_matrix(plain), h, weights));
+  weights.pop_back();
+  EXPECT_FALSE(fit_similarity(from, to, true, weighted, weights));
+  EXPECT_FALSE(fit_homography(from, to, to_matrix(plain), h, weights));
+}
+
 TEST(Voting, VotesCarryPrincipalPointsThroughTheKeypointPose) {
   // A model keypoint at (10, 0) with angle 0 seen at (100, 100), turned 90 degrees, twice as big.
   const std::vector<cv::KeyPoint> model = {cv::KeyPoint(10.f, 0.f, 4.f, 0.f)};
