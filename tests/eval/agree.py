@@ -24,11 +24,11 @@ def run(cmd):
     return json.loads(p.stdout)
 
 
-def compare(a, b, where, problems):
-    if set(a) != set(KEYS) or set(b) != set(KEYS):
-        problems.append("%s: keys differ from FORMAT.md's: %s / %s" % (where, sorted(a), sorted(b)))
+def compare(a, b, where, problems, keys=KEYS):
+    if set(a) != set(keys) or set(b) != set(keys):
+        problems.append("%s: keys differ from %s: %s / %s" % (where, sorted(keys), sorted(a), sorted(b)))
         return
-    for k in KEYS:
+    for k in keys:
         x, y = a[k], b[k]
         if x is None or y is None:
             if x is not y:
@@ -56,6 +56,16 @@ def main():
         for model in sorted(set(a["models"]) & set(b["models"])):
             compare(a["models"][model], b["models"][model], "%s.%s" % (method, model), problems)
             compared += 1
+    if ("paired_centers" in cpp) != ("paired_centers" in py):
+        problems.append("paired_centers: in one report only")
+    elif "paired_centers" in cpp:
+        a, b = cpp["paired_centers"], py["paired_centers"]
+        if a["instances"] != b["instances"]:
+            problems.append("paired_centers.instances: C++ %r, score.py %r"
+                            % (a["instances"], b["instances"]))
+        compare(a["center_mean_px"], b["center_mean_px"], "paired_centers", problems,
+                keys=sorted(set(a["center_mean_px"]) | set(b["center_mean_px"])))
+        compared += 1
     for p in problems:
         print("DISAGREE " + p)
     if compared == 0:

@@ -249,6 +249,43 @@ TEST(Metrics, CentreMeanAndP95) {
   EXPECT_NEAR(*r.center_p95_px, 3.0 + 0.8 * 7.0, 1e-12);
 }
 
+TEST(Metrics, PairedCentresCompareOnlyWhatEveryMethodFound) {
+  // Three boxes; "a" finds all three, 1 px off each; "b" finds only the first, 0.5 px off.
+  const Dataset ds =
+      one_model(100, 100,
+                {truth("box", rect(0, 0, 10, 10), 1.0), truth("box", rect(30, 30, 40, 40), 1.0),
+                 truth("box", rect(60, 60, 70, 70), 1.0)});
+  auto shifted = [](DetectedInstance d, double dx) {
+    d.points[0].x += dx;
+    return d;
+  };
+  std::map<std::string, Scorer> scorers;
+  scorers.emplace("a", ds);
+  scorers.emplace("b", ds);
+  scorers.at("a").add_scene(0, {shifted(detection("box", rect(0, 0, 10, 10)), 1.0),
+                                shifted(detection("box", rect(30, 30, 40, 40)), 1.0),
+                                shifted(detection("box", rect(60, 60, 70, 70)), 1.0)});
+  scorers.at("b").add_scene(0, {shifted(detection("box", rect(0, 0, 10, 10)), 0.5)});
+  EXPECT_DOUBLE_EQ(*scorers.at("a").overall().center_mean_px, 1.0);
+  EXPECT_DOUBLE_EQ(*scorers.at("b").overall().center_mean_px, 0.5);
+
+  const PairedCenters paired = paired_centers(scorers);
+  EXPECT_EQ(paired.instances, 1);
+  EXPECT_DOUBLE_EQ(paired.mean_px.at("a"), 1.0);
+  EXPECT_DOUBLE_EQ(paired.mean_px.at("b"), 0.5);
+  EXPECT_NE(report_table(ds, scorers)
+                .find("on the 1 required instances every method found: a "
+                      "1.000 px, b 0.500 px."),
+            std::string::npos);
+  EXPECT_NE(report_json(ds, scorers).find("\"paired_centers\""), std::string::npos);
+
+  // A method that found nothing leaves no instance to compare.
+  scorers.emplace("c", ds);
+  scorers.at("c").add_scene(0, {});
+  EXPECT_EQ(paired_centers(scorers).instances, 0);
+  EXPECT_TRUE(paired_centers(scorers).mean_px.empty());
+}
+
 TEST(Metrics, PickPrecisionAndRecall) {
   const Dataset ds = one_model(200, 100,
                                {truth("box", rect(0, 0, 20, 20), 1.0, 0.0),      // free

@@ -90,6 +90,12 @@ std::string percent(const std::optional<double>& v) {
   return buf;
 }
 
+std::string fixed3(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3f", v);
+  return buf;
+}
+
 std::string pixels(const std::optional<double>& v) {
   if (!v)
     return "-";
@@ -233,6 +239,7 @@ void Scorer::add_scene(size_t scene_index, const std::vector<DetectedInstance>& 
     t.tp_intersection += o.intersection;
     t.counted_detected += o.area_a;
     t.center_errors.push_back(distance(det.points[0], truth.points[0]));
+    center_by_truth_[{scene_index, static_cast<size_t>(g)}] = t.center_errors.back();
     const size_t n = std::min(det.points.size(), truth.points.size());
     for (size_t i = 0; i < n; ++i) {
       t.point_error_sum += distance(det.points[i], truth.points[i]);
@@ -289,6 +296,27 @@ Summary Scorer::overall() const {
   for (const auto& kv : frame_ms_)
     all.ms.push_back(kv.second);
   return all.summary();
+}
+
+PairedCenters paired_centers(const std::map<std::string, Scorer>& scorers) {
+  PairedCenters out;
+  if (scorers.empty())
+    return out;
+  std::map<std::string, double> sums;
+  for (const auto& [key, error] : scorers.begin()->second.center_errors()) {
+    const bool everywhere = std::all_of(scorers.begin(), scorers.end(), [&](const auto& kv) {
+      return kv.second.center_errors().count(key) > 0;
+    });
+    if (!everywhere)
+      continue;
+    ++out.instances;
+    for (const auto& [method, scorer] : scorers)
+      sums[method] += scorer.center_errors().at(key);
+  }
+  if (out.instances > 0)
+    for (const auto& [method, sum] : sums)
+      out.mean_px[method] = sum / static_cast<double>(out.instances);
+  return out;
 }
 
 std::map<std::string, Scorer> score_detections(const Dataset& dataset,
@@ -352,6 +380,25 @@ std::string report_json(const Dataset& dataset, const std::map<std::string, Scor
     json_builder_end_object(b);
   }
   json_builder_end_object(b);
+  if (scorers.size() > 1) {
+    const PairedCenters paired = paired_centers(scorers);
+    json_builder_set_member_name(b, "paired_centers");
+    json_builder_begin_object(b);
+    json_builder_set_member_name(b, "instances");
+    json_builder_add_int_value(b, paired.instances);
+    json_builder_set_member_name(b, "center_mean_px");
+    json_builder_begin_object(b);
+    for (const std::string& method : method_order(scorers)) {
+      json_builder_set_member_name(b, method.empty() ? "detections" : method.c_str());
+      auto it = paired.mean_px.find(method);
+      if (it == paired.mean_px.end())
+        json_builder_add_null_value(b);
+      else
+        json_builder_add_double_value(b, it->second);
+    }
+    json_builder_end_object(b);
+    json_builder_end_object(b);
+  }
   json_builder_end_object(b);
   std::string out = to_text(b, 2);
   g_object_unref(b);
@@ -404,6 +451,18 @@ std::string report_table(const Dataset& dataset, const std::map<std::string, Sco
     line(r);
   out << "\nobj/pix/pick P and R in %, centre (mean), c p95 and points (mean) in pixels, "
          "ms/frame the median (per model only when each model ran alone, --per-model).\n";
+  if (scorers.size() > 1) {
+    const PairedCenters paired = paired_centers(scorers);
+    out << "\nCentre error on the " << paired.instances
+        << " required instances every method found:";
+    for (const std::string& method : methods) {
+      auto it = paired.mean_px.find(method);
+      out << " " << (method.empty() ? "detections" : method) << " "
+          << (it == paired.mean_px.end() ? std::string("-") : fixed3(it->second)) << " px"
+          << (method == methods.back() ? "." : ",");
+    }
+    out << "\n";
+  }
   return out.str();
 }
 

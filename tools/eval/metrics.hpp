@@ -90,12 +90,26 @@ public:
   Summary model_summary(const std::string& model) const;
   Summary overall() const;
   const Dataset& dataset() const { return dataset_; }
+  /// Centre error of every true positive, keyed by (scene index, true instance index).
+  const std::map<std::pair<size_t, size_t>, double>& center_errors() const {
+    return center_by_truth_;
+  }
 
 private:
   const Dataset& dataset_;
   std::map<std::string, Tally> tallies_;
+  std::map<std::pair<size_t, size_t>, double> center_by_truth_;
   std::map<size_t, double> frame_ms_; ///< Scene -> time summed over models.
 };
+
+/// Centre errors compared on the same instances: the mean per method over the true instances
+/// that every method found (each method's own mean is over its own true positives, so a method
+/// that finds only the easy instances can show a lower one).
+struct PairedCenters {
+  long instances = 0;
+  std::map<std::string, double> mean_px; ///< Per method; empty when `instances` is 0.
+};
+PairedCenters paired_centers(const std::map<std::string, Scorer>& scorers);
 
 /// Scores a whole detections file against a dataset: one Scorer per method ("" when the lines
 /// carry no method). Throws FormatError on images the dataset lacks or listed twice.

@@ -279,7 +279,7 @@ def new_tally():
             "pick_req": 0, "pick_found": 0, "ms": []}
 
 
-def score_scene(tally, scene, dets, model):
+def score_scene(tally, scene, dets, model, centers_by_truth):
     w, h = scene["width"], scene["height"]
     insts = scene["instances"]
     pick_known = all(t["covered"] is not None for t in insts)
@@ -320,6 +320,7 @@ def score_scene(tally, scene, dets, model):
         tally["det"] += ad
         tally["centers"].append(math.hypot(d["points"][0][0] - g["points"][0][0],
                                            d["points"][0][1] - g["points"][0][1]))
+        centers_by_truth[gi] = tally["centers"][-1]
         for p, q in zip(d["points"], g["points"]):
             tally["pt_sum"] += math.hypot(p[0] - q[0], p[1] - q[1])
             tally["pt_n"] += 1
@@ -382,13 +383,17 @@ def score(ds, lines, only_method=None):
                 raise FormatError("model '%s' is not one of the dataset's models" % d["model"])
         per_method[method][si] = line
     report = {"dataset": ds["name"], "methods": {}}
+    centers = {}  # method -> {(scene, true instance): centre error}
     for method, by_scene in per_method.items():
+        centers[method] = {}
         tallies = {m: new_tally() for m in ds["model_order"]}
         frame_ms = {}
         for si, scene in enumerate(ds["scenes"]):
             line = by_scene.get(si, {"instances": [], "ms": {}, "frame_ms": None})
             for m in ds["model_order"]:
-                score_scene(tallies[m], scene, line["instances"], m)
+                by_truth = {}
+                score_scene(tallies[m], scene, line["instances"], m, by_truth)
+                centers[method].update({(si, gi): e for gi, e in by_truth.items()})
             for m, ms in line["ms"].items():
                 tallies[m]["ms"].append(ms)
                 frame_ms[si] = frame_ms.get(si, 0.0) + ms
@@ -402,6 +407,13 @@ def score(ds, lines, only_method=None):
         report["methods"][method] = {
             "overall": summarise(pooled),
             "models": {m: summarise(tallies[m]) for m in ds["model_order"]}}
+    if len(centers) > 1:
+        # Centre errors on the same instances: those every method found.
+        common = set.intersection(*(set(c) for c in centers.values()))
+        report["paired_centers"] = {
+            "instances": len(common),
+            "center_mean_px": {m: sum(c[k] for k in common) / len(common) if common else None
+                               for m, c in centers.items()}}
     return report
 
 
