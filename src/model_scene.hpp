@@ -49,8 +49,13 @@ std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bo
 /// `claimed` by a stronger instance) until they settle; returns the inliers.
 std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,
                              const std::vector<char>& claimed);
+/// The similarity refitted on settled inliers `in` with a robust loss (Loss::Cauchy): the few
+/// wrong or badly placed pairs within the inlier distance pull it less.
+void refine_robustly(const ModelScene& ms, const std::vector<int>& in, bool allow_scale,
+                     Similarity& pose);
 /// Homography fitted by least squares on the inliers of a similarity pose, kept when it is well
-/// supported and stays close to the similarity; `in` becomes its own inlier set.
+/// supported and stays close to the similarity, then refitted robustly (Loss::Cauchy); `in`
+/// becomes its own inlier set.
 bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow_scale,
                         const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h);
 

@@ -22,6 +22,28 @@ constexpr double kHomographyStop = 1e-10;
 /// Smallest pivot of the normal equations, relative to the largest, of a determined fit.
 constexpr double kMinPivot = 1e-9;
 
+/// Loss::Cauchy: weights 1 / (1 + (r / (k sigma))^2), k = 2.385 (95 % efficiency on Gaussian
+/// noise), sigma the residuals' median * 1.4826, floored at kMinRobustSigmaPx (in `to`'s
+/// pixels) so that a nearly exact fit does not single out pairs by noise far below a pixel.
+/// The similarity is reweighted this many times.
+constexpr double kCauchyK = 2.385;
+constexpr double kMinRobustSigmaPx = 0.05;
+constexpr int kRobustRounds = 5;
+
+/// Cauchy weights of `residuals` (any unit; `min_sigma` in the same), times `base` if given.
+std::vector<double> cauchy_weights(const std::vector<double>& residuals, double min_sigma,
+                                   const std::vector<double>& base) {
+  std::vector<double> sorted = residuals;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double sigma = std::max(min_sigma, 1.4826 * sorted[sorted.size() / 2]);
+  std::vector<double> w(residuals.size());
+  for (size_t k = 0; k < residuals.size(); ++k) {
+    const double u = residuals[k] / (kCauchyK * sigma);
+    w[k] = (base.empty() ? 1.0 : base[k]) / (1.0 + u * u);
+  }
+  return w;
+}
+
 /// Similarity normalisation (Hartley): centroid to the origin, mean distance sqrt(2).
 Eigen::Matrix3d normaliser(const std::vector<cv::Point2f>& points) {
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
@@ -55,8 +77,11 @@ std::vector<cv::Point2f> Similarity::apply(const std::vector<cv::Point2f>& point
   return out;
 }
 
-bool fit_similarity(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
-                    bool allow_scale, Similarity& out, const std::vector<double>& weights) {
+namespace {
+
+bool similarity_closed_form(const std::vector<cv::Point2f>& from,
+                            const std::vector<cv::Point2f>& to, bool allow_scale,
+                            const std::vector<double>& weights, Similarity& out) {
   // Umeyama's closed form in the plane, with weights (Eigen::umeyama has none): weighted
   // centroids, then the rotation and scale from the weighted cross-covariance.
   const size_t n = from.size();
@@ -99,6 +124,31 @@ bool fit_similarity(const std::vector<cv::Point2f>& from, const std::vector<cv::
   return true;
 }
 
+} // namespace
+
+bool fit_similarity(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                    bool allow_scale, Similarity& out, const std::vector<double>& weights,
+                    Loss loss) {
+  Similarity fit;
+  if (!similarity_closed_form(from, to, allow_scale, weights, fit))
+    return false;
+  if (loss == Loss::Cauchy)
+    for (int round = 0; round < kRobustRounds; ++round) {
+      const cv::Matx33d m = to_matrix(fit);
+      std::vector<double> r(from.size());
+      for (size_t i = 0; i < from.size(); ++i)
+        r[i] = std::hypot(m(0, 0) * from[i].x + m(0, 1) * from[i].y + m(0, 2) - to[i].x,
+                          m(1, 0) * from[i].x + m(1, 1) * from[i].y + m(1, 2) - to[i].y);
+      Similarity next;
+      if (!similarity_closed_form(from, to, allow_scale,
+                                  cauchy_weights(r, kMinRobustSigmaPx, weights), next))
+        break;
+      fit = next;
+    }
+  out = fit;
+  return true;
+}
+
 cv::Matx33d to_matrix(const Similarity& pose) {
   const double rad = pose.angle * CV_PI / 180.0;
   const double c = std::cos(rad) * pose.scale, s = std::sin(rad) * pose.scale;
@@ -107,7 +157,7 @@ cv::Matx33d to_matrix(const Similarity& pose) {
 
 bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
                     const cv::Matx33d& initial, cv::Matx33d& out,
-                    const std::vector<double>& weights) {
+                    const std::vector<double>& weights, Loss loss) {
   const size_t n = from.size();
   if (n < 4 || to.size() != n || (!weights.empty() && weights.size() != n))
     return false;
@@ -129,25 +179,38 @@ bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::
     x[i] = (tf * Eigen::Vector3d(from[i].x, from[i].y, 1.0)).head<2>();
     y[i] = (tt * Eigen::Vector3d(to[i].x, to[i].y, 1.0)).head<2>();
   }
+  // Cauchy: each step reweights the pairs by their residuals under the current estimate
+  // (iteratively reweighted Gauss-Newton); the sigma floor in normalised units.
+  const double min_sigma = kMinRobustSigmaPx * tt(0, 0);
+  std::vector<Eigen::Vector2d> mapped(n);
+  std::vector<double> denominators(n), residuals(n);
   for (int step = 0; step < kHomographySteps; ++step) {
-    Eigen::Matrix<double, 8, 8> jtj = Eigen::Matrix<double, 8, 8>::Zero();
-    Eigen::Matrix<double, 8, 1> jtr = Eigen::Matrix<double, 8, 1>::Zero();
     for (size_t i = 0; i < n; ++i) {
       const double px = x[i].x(), py = x[i].y();
       const double w = hn(2, 0) * px + hn(2, 1) * py + 1.0;
       if (!(w > 1e-9))
         return false; // A point maps behind the camera: no valid picture of the object.
-      const double u = (hn(0, 0) * px + hn(0, 1) * py + hn(0, 2)) / w;
-      const double v = (hn(1, 0) * px + hn(1, 1) * py + hn(1, 2)) / w;
+      denominators[i] = w;
+      mapped[i] = Eigen::Vector2d((hn(0, 0) * px + hn(0, 1) * py + hn(0, 2)) / w,
+                                  (hn(1, 0) * px + hn(1, 1) * py + hn(1, 2)) / w);
+      residuals[i] = (mapped[i] - y[i]).norm();
+    }
+    const std::vector<double> wts =
+        loss == Loss::Cauchy ? cauchy_weights(residuals, min_sigma, weights) : weights;
+    Eigen::Matrix<double, 8, 8> jtj = Eigen::Matrix<double, 8, 8>::Zero();
+    Eigen::Matrix<double, 8, 1> jtr = Eigen::Matrix<double, 8, 1>::Zero();
+    for (size_t i = 0; i < n; ++i) {
+      const double px = x[i].x(), py = x[i].y(), w = denominators[i];
+      const double u = mapped[i].x(), v = mapped[i].y();
       Eigen::Matrix<double, 2, 8> j;
       j << px / w, py / w, 1.0 / w, 0.0, 0.0, 0.0, -u * px / w, -u * py / w, //
           0.0, 0.0, 0.0, px / w, py / w, 1.0 / w, -v * px / w, -v * py / w;
-      const Eigen::Vector2d r(u - y[i].x(), v - y[i].y());
-      const double wt = weights.empty() ? 1.0 : weights[i];
-      jtj.noalias() += wt * j.transpose() * j;
+      const Eigen::Vector2d r = mapped[i] - y[i];
+      const double wt = wts.empty() ? 1.0 : wts[i];
+      jtj.selfadjointView<Eigen::Lower>().rankUpdate(j.transpose(), wt); // Lower half only.
       jtr.noalias() += wt * j.transpose() * r;
     }
-    const Eigen::LDLT<Eigen::Matrix<double, 8, 8>> solver(jtj);
+    const Eigen::LDLT<Eigen::Matrix<double, 8, 8>, Eigen::Lower> solver(jtj);
     // A (near) zero pivot: the points do not fix the eight unknowns (collinear, repeated).
     const Eigen::Matrix<double, 8, 1> pivots = solver.vectorD();
     if (solver.info() != Eigen::Success || !(pivots.minCoeff() > kMinPivot * pivots.maxCoeff()))

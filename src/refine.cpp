@@ -29,14 +29,6 @@ constexpr double kMinPerspectiveSpread = 0.2;
 /// ...and it is kept only if no outline point moves farther than this share of the model's
 /// smaller side from where the similarity puts it.
 constexpr double kMaxPerspectiveShift = 0.15;
-/// Robust final fit (an M-estimator by iteratively reweighted least squares): the inliers keep
-/// their pairs, but a pair whose residual is large against the others' weighs less. Cauchy
-/// weights 1 / (1 + (r / (k sigma))^2), k = 2.385 (95 % efficiency on Gaussian noise), sigma
-/// the residuals' median absolute size * 1.4826, floored at kMinRobustSigmaPx so that a nearly
-/// exact fit does not single out pairs by noise far below a pixel.
-constexpr int kRobustRounds = 5;
-constexpr double kCauchyK = 2.385;
-constexpr double kMinRobustSigmaPx = 0.05;
 
 /// Matches (indices into ms.matches, not yet claimed) consistent with a pose: `map` (the pose
 /// itself, or a homography close to it) carries the model keypoint to within the inlier distance
@@ -68,25 +60,6 @@ std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, const 
   return in;
 }
 
-/// Cauchy weights of the pairs' residuals under `map` (see kCauchyK).
-std::vector<double> cauchy_weights(const std::vector<cv::Point2f>& from,
-                                   const std::vector<cv::Point2f>& to, const cv::Matx33d& map) {
-  std::vector<cv::Point2f> mapped;
-  cv::perspectiveTransform(from, mapped, cv::Mat(map));
-  std::vector<double> r(from.size());
-  for (size_t k = 0; k < from.size(); ++k)
-    r[k] = cv::norm(mapped[k] - to[k]);
-  std::vector<double> sorted = r;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double sigma = std::max(kMinRobustSigmaPx, 1.4826 * sorted[sorted.size() / 2]);
-  std::vector<double> w(r.size());
-  for (size_t k = 0; k < r.size(); ++k) {
-    const double u = r[k] / (kCauchyK * sigma);
-    w[k] = 1.0 / (1.0 + u * u);
-  }
-  return w;
-}
-
 } // namespace
 
 /// Refits the pose on its own inlier matches until the inlier set settles.
@@ -105,16 +78,15 @@ std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_
       break;
     in = std::move(again);
   }
-  if (in.size() >= 3) {
-    const std::vector<cv::Point2f> from = model_points(ms, in), to = scene_points(ms, in);
-    for (int round = 0; round < kRobustRounds; ++round) {
-      Similarity next;
-      if (!fit_similarity(from, to, allow_scale, next, cauchy_weights(from, to, to_matrix(pose))))
-        break;
-      pose = next;
-    }
-  }
   return in;
+}
+
+void refine_robustly(const ModelScene& ms, const std::vector<int>& in, bool allow_scale,
+                     Similarity& pose) {
+  Similarity robust;
+  if (in.size() >= 3 && fit_similarity(model_points(ms, in), scene_points(ms, in), allow_scale,
+                                       robust, {}, Loss::Cauchy))
+    pose = robust;
 }
 
 /// Homography fitted by least squares on the inliers of a similarity pose, kept when it is well
@@ -135,7 +107,8 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
   bool found = false;
   cv::Matx33d candidate = to_matrix(pose);
   for (int round = 0; round < kRefineRounds; ++round) {
-    if (!fit_homography(model_points(ms, current), scene_points(ms, current), candidate, candidate))
+    if (!fit_homography(model_points(ms, current), scene_points(ms, current), candidate, candidate,
+                        {}, Loss::Cauchy))
       break;
     std::vector<cv::Point2f> outline;
     cv::perspectiveTransform(ms.model.outline, outline, cv::Mat(candidate));
@@ -156,13 +129,6 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
   if (!found)
     return false;
   in = std::move(current);
-  const std::vector<cv::Point2f> from = model_points(ms, in), to = scene_points(ms, in);
-  for (int round = 0; round < kRobustRounds; ++round) {
-    cv::Matx33d next;
-    if (!fit_homography(from, to, h, next, cauchy_weights(from, to, h)))
-      break;
-    h = next;
-  }
   return true;
 }
 

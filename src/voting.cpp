@@ -183,10 +183,12 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
         continue;
       cv::Matx33d h;
       // Without allow_scale the objects keep the model's size: the pose stays rigid.
-      if (s.allow_scale && refine_perspective(ms, pose, s.allow_scale, claimed, in, h))
+      if (s.allow_scale && refine_perspective(ms, pose, s.allow_scale, claimed, in, h)) {
         place(inst, ms.model, h);
-      else
+      } else {
+        refine_robustly(ms, in, s.allow_scale, pose);
         place(inst, ms.model, pose);
+      }
       for (int i : in)
         claimed[i] = 1;
       inst.matches = static_cast<int>(in.size());
