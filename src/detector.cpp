@@ -2,6 +2,7 @@
 // The detector: features, matching, then one of the three methods per model, then occlusion.
 #include <pickdetect/detector.hpp>
 
+#include "look_alikes.hpp"
 #include "model_scene.hpp"
 
 #include <pickdetect/error.hpp>
@@ -153,6 +154,8 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
       result.instances.push_back(std::move(inst));
     }
   }
+  if (s.method == Method::Voting && s.refine)
+    detail::drop_look_alikes(result.instances);
   // Best first; the order depends only on the instances, never on timing.
   std::stable_sort(result.instances.begin(), result.instances.end(),
                    [](const Instance& a, const Instance& b) {

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // The building blocks: votes, mean shift, similarity fits, RANSAC, occlusion.
+#include "../../src/look_alikes.hpp"
 #include "../common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
@@ -315,4 +316,64 @@ TEST(Detector, OrbAndReducedDetectionFindTheBoxes) {
       EXPECT_LE(best, 1.5) << feature_name(s.features) << " at " << s.detection_scale;
     }
   }
+}
+
+namespace {
+
+/// An instance of `model` with the given outline and supporting keypoints.
+Instance placed(int model, std::vector<cv::Point2f> outline, std::vector<cv::Point2f> support) {
+  Instance inst;
+  inst.model = model;
+  inst.model_name = "m" + std::to_string(model);
+  inst.outline = std::move(outline);
+  inst.support = std::move(support);
+  inst.matches = static_cast<int>(inst.support.size());
+  return inst;
+}
+
+std::vector<cv::Point2f> square(float x, float y, float side) {
+  return {{x, y}, {x + side, y}, {x + side, y + side}, {x, y + side}};
+}
+
+std::vector<cv::Point2f> spread(float x, float y, int n) {
+  std::vector<cv::Point2f> p;
+  for (int i = 0; i < n; ++i)
+    p.emplace_back(x + 7.f * (i % 10), y + 9.f * static_cast<float>(i / 10));
+  return p;
+}
+
+} // namespace
+
+TEST(LookAlikes, TheWeakerOfTwoModelsInTheSamePlaceGoes) {
+  // Model 1 found where model 0 is, nearly the same outline, its 5 keypoints on model 0's.
+  std::vector<Instance> found = {placed(0, square(100, 100, 200), spread(120, 120, 60)),
+                                 placed(1, square(103, 98, 200), spread(150, 150, 5))};
+  detail::drop_look_alikes(found);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model, 0);
+  // Whichever comes first: the stronger one stays.
+  found = {placed(1, square(103, 98, 200), spread(150, 150, 5)),
+           placed(0, square(100, 100, 200), spread(120, 120, 60))};
+  detail::drop_look_alikes(found);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model, 0);
+}
+
+TEST(LookAlikes, OverlappingProductsAndTwoOfOneProductStay) {
+  // The same model twice in the same place is not a look-alike (mean shift keeps those apart).
+  std::vector<Instance> found = {placed(0, square(100, 100, 200), spread(120, 120, 60)),
+                                 placed(0, square(103, 98, 200), spread(150, 150, 5))};
+  detail::drop_look_alikes(found);
+  EXPECT_EQ(found.size(), 2u);
+  // A product lying half over another: outlines overlap, but far from the same place.
+  found = {placed(0, square(100, 100, 200), spread(120, 120, 60)),
+           placed(1, square(200, 100, 200), spread(310, 120, 20))};
+  detail::drop_look_alikes(found);
+  EXPECT_EQ(found.size(), 2u);
+  // Nearly the same outline, but the weaker one's keypoints lie outside the stronger one's:
+  // its evidence is its own.
+  found = {placed(0, square(100, 100, 200), spread(120, 120, 60)),
+           placed(1, square(100, 110, 200), spread(150, 303, 6))};
+  detail::drop_look_alikes(found);
+  EXPECT_EQ(found.size(), 2u);
 }
