@@ -49,6 +49,9 @@ std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bo
 /// `claimed` by a stronger instance) until they settle; returns the inliers.
 std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,
                              const std::vector<char>& claimed);
+/// Root mean square distance, in scene pixels, between the inliers' scene keypoints and where
+/// `map` carries their model keypoints.
+double inlier_rms(const ModelScene& ms, const std::vector<int>& in, const cv::Matx33d& map);
 /// The similarity refitted on settled inliers `in` with a robust loss (Loss::Cauchy): the few
 /// wrong or badly placed pairs within the inlier distance pull it less.
 void refine_robustly(const ModelScene& ms, const std::vector<int>& in, bool allow_scale,

@@ -81,6 +81,20 @@ std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_
   return in;
 }
 
+double inlier_rms(const ModelScene& ms, const std::vector<int>& in, const cv::Matx33d& map) {
+  if (in.empty())
+    return 0.0;
+  std::vector<cv::Point2f> mapped;
+  cv::perspectiveTransform(model_points(ms, in), mapped, cv::Mat(map));
+  const std::vector<cv::Point2f> seen = scene_points(ms, in);
+  double sum = 0.0;
+  for (size_t k = 0; k < in.size(); ++k) {
+    const cv::Point2f d = mapped[k] - seen[k];
+    sum += d.dot(d);
+  }
+  return std::sqrt(sum / static_cast<double>(in.size()));
+}
+
 void refine_robustly(const ModelScene& ms, const std::vector<int>& in, bool allow_scale,
                      Similarity& pose) {
   Similarity robust;
