@@ -120,12 +120,18 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
                           scene.keypoints,
                           {},
                           {},
-                          0.0};
+                          0.0,
+                          0.f,
+                          {},
+                          0,
+                          0,
+                          {}};
     for (const Match& match : matches)
       if (match.model == static_cast<int>(m))
         ms.matches.push_back(match);
     if (static_cast<int>(ms.matches.size()) < std::max(1, s.min_matches))
       continue;
+    detail::index_matches(ms);
     ms.votes = cast_votes(ms.matches, ms.model_keypoints, scene.keypoints,
                           ms.model.principal_points, s.allow_scale);
     ms.bandwidth =

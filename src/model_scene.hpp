@@ -23,7 +23,18 @@ struct ModelScene {
   std::vector<Match> matches;
   std::vector<Vote> votes;
   double bandwidth = 0.0;
+  /// The matches by where their scene keypoints lie: a grid of square cells of `cell` pixels,
+  /// each listing its matches in increasing order (see index_matches).
+  float cell = 0.f;
+  cv::Point2f grid_origin;
+  int grid_cols = 0, grid_rows = 0;
+  std::vector<std::vector<int>> grid;
 };
+
+/// Fills the grid of `ms` from its matches (cells of half the model's smaller side).
+void index_matches(ModelScene& ms);
+/// The matches whose scene keypoints lie in `box` (scene pixels), in increasing order.
+std::vector<int> matches_in(const ModelScene& ms, const cv::Rect2f& box);
 
 /// The model's smaller side (of its outline's bounding box), in model pixels.
 double model_side(const Model& model);

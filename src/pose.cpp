@@ -19,6 +19,9 @@ double wrap_degrees(double a) {
 /// Gauss-Newton: at most this many steps, ended earlier by a step this small (normalised units).
 constexpr int kHomographySteps = 10;
 constexpr double kHomographyStop = 1e-10;
+/// With Loss::Cauchy the weights move a little at every step: stop at steps this small
+/// (about a hundredth of a pixel for an object 200 px across).
+constexpr double kRobustHomographyStop = 1e-8;
 /// Smallest pivot of the normal equations, relative to the largest, of a determined fit.
 constexpr double kMinPivot = 1e-9;
 
@@ -220,7 +223,7 @@ bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::
       return false;
     for (int k = 0; k < 8; ++k)
       hn(k / 3, k % 3) += delta(k);
-    if (delta.squaredNorm() < kHomographyStop)
+    if (delta.squaredNorm() < (loss == Loss::Cauchy ? kRobustHomographyStop : kHomographyStop))
       break;
   }
   const Eigen::Matrix3d h = tt.inverse() * hn * tf;

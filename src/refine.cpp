@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 
 namespace pickdetect::detail {
@@ -37,8 +38,29 @@ constexpr double kMaxPerspectiveShift = 0.15;
 std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, const cv::Matx33d& map,
                             bool allow_scale, const std::vector<char>& claimed) {
   const double tol = std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * pose.scale);
+  // Only matches whose scene keypoints lie where the map puts the model picture can be inliers.
+  const cv::Size2f picture(static_cast<float>(ms.model.image.cols),
+                           static_cast<float>(ms.model.image.rows));
+  const std::vector<cv::Point2f> corners = {
+      {0.f, 0.f}, {picture.width, 0.f}, {picture.width, picture.height}, {0.f, picture.height}};
+  float x0 = FLT_MAX, y0 = FLT_MAX, x1 = -FLT_MAX, y1 = -FLT_MAX;
+  for (const cv::Point2f& c : corners) {
+    const cv::Vec3d p = map * cv::Vec3d(c.x, c.y, 1.0);
+    // No picture to place, or it reaches behind the camera: look everywhere.
+    if (ms.model.image.empty() || !(p[2] > 0.0)) {
+      x0 = y0 = -FLT_MAX / 4;
+      x1 = y1 = FLT_MAX / 4;
+      break;
+    }
+    x0 = std::min(x0, static_cast<float>(p[0] / p[2]));
+    y0 = std::min(y0, static_cast<float>(p[1] / p[2]));
+    x1 = std::max(x1, static_cast<float>(p[0] / p[2]));
+    y1 = std::max(y1, static_cast<float>(p[1] / p[2]));
+  }
+  const float margin = static_cast<float>(tol) + 1.f;
+  const cv::Rect2f box(x0 - margin, y0 - margin, x1 - x0 + 2.f * margin, y1 - y0 + 2.f * margin);
   std::vector<int> in;
-  for (size_t i = 0; i < ms.matches.size(); ++i) {
+  for (const int i : matches_in(ms, box)) {
     if (claimed[i])
       continue;
     const Vote& v = ms.votes[i];
