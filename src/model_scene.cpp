@@ -64,7 +64,10 @@ void index_matches(ModelScene& ms) {
     const cv::Point2f p = ms.scene_keypoints[m.scene_point].pt;
     x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
   }
-  ms.cell = static_cast<float>(std::max(8.0, 0.5 * model_side(ms.model)));
+  // Cells of half the model's side, at least 8 px, and at most 256 on a side of the grid
+  // (a small model on a huge frame).
+  ms.cell = std::max(
+      {8.f, static_cast<float>(0.5 * model_side(ms.model)), (x1 - x0) / 256.f, (y1 - y0) / 256.f});
   ms.grid_origin = cv::Point2f(x0, y0);
   ms.grid_cols = static_cast<int>((x1 - x0) / ms.cell) + 1;
   ms.grid_rows = static_cast<int>((y1 - y0) / ms.cell) + 1;

@@ -31,7 +31,8 @@ struct ModelScene {
   std::vector<std::vector<int>> grid;
 };
 
-/// Fills the grid of `ms` from its matches (cells of half the model's smaller side).
+/// Fills the grid of `ms` from its matches (cells of half the model's smaller side, at most
+/// 256 x 256 of them).
 void index_matches(ModelScene& ms);
 /// The matches whose scene keypoints lie in `box` (scene pixels), in increasing order.
 std::vector<int> matches_in(const ModelScene& ms, const cv::Rect2f& box);
