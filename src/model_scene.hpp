@@ -68,8 +68,8 @@ double inlier_rms(const ModelScene& ms, const std::vector<int>& in, const cv::Ma
 /// wrong or badly placed pairs within the inlier distance pull it less.
 void refine_robustly(const ModelScene& ms, const std::vector<int>& in, bool allow_scale,
                      Similarity& pose);
-/// Homography fitted by least squares on the inliers of a similarity pose, kept when it is well
-/// supported and stays close to the similarity, then refitted robustly (Loss::Cauchy); `in`
+/// Homography fitted robustly (Loss::Cauchy) on the inliers of a similarity pose, refitted until
+/// its inliers settle, kept when it is well supported and stays close to the similarity; `in`
 /// becomes its own inlier set.
 bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow_scale,
                         const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h);

@@ -33,6 +33,12 @@ constexpr double kCauchyK = 2.385;
 constexpr double kMinRobustSigmaPx = 0.05;
 constexpr int kRobustRounds = 5;
 
+/// Weights for `n` pairs: none (all count once), or one per pair, none negative.
+bool valid_weights(const std::vector<double>& weights, size_t n) {
+  return weights.empty() || (weights.size() == n && std::all_of(weights.begin(), weights.end(),
+                                                                [](double w) { return w >= 0.0; }));
+}
+
 /// Cauchy weights of `residuals` (any unit; `min_sigma` in the same), times `base` if given.
 std::vector<double> cauchy_weights(const std::vector<double>& residuals, double min_sigma,
                                    const std::vector<double>& base) {
@@ -88,15 +94,13 @@ bool similarity_closed_form(const std::vector<cv::Point2f>& from,
   // Umeyama's closed form in the plane, with weights (Eigen::umeyama has none): weighted
   // centroids, then the rotation and scale from the weighted cross-covariance.
   const size_t n = from.size();
-  if (n < 2 || to.size() != n || (!weights.empty() && weights.size() != n))
+  if (n < 2 || to.size() != n || !valid_weights(weights, n))
     return false;
   auto weight = [&](size_t i) { return weights.empty() ? 1.0 : weights[i]; };
   double total = 0.0;
   Eigen::Vector2d mean_from = Eigen::Vector2d::Zero(), mean_to = Eigen::Vector2d::Zero();
   for (size_t i = 0; i < n; ++i) {
     const double w = weight(i);
-    if (!(w >= 0.0))
-      return false;
     total += w;
     mean_from += w * Eigen::Vector2d(from[i].x, from[i].y);
     mean_to += w * Eigen::Vector2d(to[i].x, to[i].y);
@@ -162,9 +166,7 @@ bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::
                     const cv::Matx33d& initial, cv::Matx33d& out,
                     const std::vector<double>& weights, Loss loss) {
   const size_t n = from.size();
-  if (n < 4 || to.size() != n || (!weights.empty() && weights.size() != n))
-    return false;
-  if (std::any_of(weights.begin(), weights.end(), [](double w) { return !(w >= 0.0); }))
+  if (n < 4 || to.size() != n || !valid_weights(weights, n))
     return false;
   // In normalised coordinates the eight unknowns have comparable sizes, so the normal
   // equations stay well conditioned; the residuals are scaled by the scene's factor only.
@@ -186,7 +188,7 @@ bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::
   // (iteratively reweighted Gauss-Newton); the sigma floor in normalised units.
   const double min_sigma = kMinRobustSigmaPx * tt(0, 0);
   std::vector<Eigen::Vector2d> mapped(n);
-  std::vector<double> denominators(n), residuals(n);
+  std::vector<double> denominators(n), residuals(loss == Loss::Cauchy ? n : 0), robust;
   for (int step = 0; step < kHomographySteps; ++step) {
     for (size_t i = 0; i < n; ++i) {
       const double px = x[i].x(), py = x[i].y();
@@ -196,10 +198,12 @@ bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::
       denominators[i] = w;
       mapped[i] = Eigen::Vector2d((hn(0, 0) * px + hn(0, 1) * py + hn(0, 2)) / w,
                                   (hn(1, 0) * px + hn(1, 1) * py + hn(1, 2)) / w);
-      residuals[i] = (mapped[i] - y[i]).norm();
+      if (loss == Loss::Cauchy)
+        residuals[i] = (mapped[i] - y[i]).norm();
     }
-    const std::vector<double> wts =
-        loss == Loss::Cauchy ? cauchy_weights(residuals, min_sigma, weights) : weights;
+    if (loss == Loss::Cauchy)
+      robust = cauchy_weights(residuals, min_sigma, weights);
+    const std::vector<double>& wts = loss == Loss::Cauchy ? robust : weights;
     Eigen::Matrix<double, 8, 8> jtj = Eigen::Matrix<double, 8, 8>::Zero();
     Eigen::Matrix<double, 8, 1> jtr = Eigen::Matrix<double, 8, 1>::Zero();
     for (size_t i = 0; i < n; ++i) {

@@ -125,8 +125,9 @@ void refine_robustly(const ModelScene& ms, const std::vector<int>& in, bool allo
     pose = robust;
 }
 
-/// Homography fitted by least squares on the inliers of a similarity pose, kept when it is well
-/// supported and stays close to the similarity; `in` becomes its own inlier set.
+/// Homography fitted robustly (Loss::Cauchy) on the inliers of a similarity pose, refitted until
+/// its inliers settle, kept when it is well supported and stays close to the similarity; `in`
+/// becomes its own inlier set.
 bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow_scale,
                         const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h) {
   if (in.size() < kMinPerspectiveMatches)
