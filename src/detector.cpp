@@ -107,8 +107,13 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
   Detection result;
   result.scene_keypoints = static_cast<int>(scene.keypoints.size());
   auto t = Clock::now();
+  // The voting method with refinement shares a feature between look-alike models and decides
+  // which product an object is from each instance's own evidence (drop_look_alikes); the
+  // baselines and the paper's plain voting reject such features, as the paper does.
+  const bool share = s.method == Method::Voting && s.refine;
   const std::vector<Match> matches = (s.features == FeatureKind::Orb ? orb_matcher_ : sift_matcher_)
-                                         .match(scene.descriptors, s.ratio, s.search);
+                                         .match(scene.descriptors, s.ratio, s.search,
+                                                share ? Ambiguity::Share : Ambiguity::Reject);
   result.matches = static_cast<int>(matches.size());
   result.timings.matching_ms = ms_since(t);
 
@@ -160,8 +165,8 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
       result.instances.push_back(std::move(inst));
     }
   }
-  if (s.method == Method::Voting && s.refine)
-    detail::drop_look_alikes(result.instances);
+  if (share)
+    detail::drop_look_alikes(result.instances, (std::max(1, s.min_matches) + 1) / 2);
   // Best first; the order depends only on the instances, never on timing.
   std::stable_sort(result.instances.begin(), result.instances.end(),
                    [](const Instance& a, const Instance& b) {

@@ -8,13 +8,19 @@
 
 namespace pickdetect::detail {
 
-/// Look-alike products (a family sharing a brand's design) let a few of one product's features
-/// match another product's picture, so one object can come out as a strong instance of its own
-/// model and a weak one of a look-alike, in the same place. Two different objects cannot lie
-/// there both: an instance is dropped when an instance of another model with more matches
-/// covers at least kSamePlaceIoU of the pair's joint outline (intersection over union) and
-/// holds at least half of its supporting keypoints. A box lying on another keeps its own
-/// evidence outside the box below, so it stays.
-void drop_look_alikes(std::vector<Instance>& instances);
+/// Look-alike products (a family sharing a brand's design) let one object come out as an
+/// instance of its own model and as instances of its look-alikes, in the same place: with
+/// Ambiguity::Share every model gets the matches of the shared design, and only the product's
+/// own design gives distinct matches (Instance::distinct_matches). Two different objects cannot
+/// lie there both. Instances are rivals when they are of different models and one explains the
+/// other: it covers at least kSamePlaceIoU of the pair's joint outline (intersection over
+/// union) and holds at least half of the other's supporting keypoints. A box lying on another
+/// keeps its own evidence outside the box below, so both stay.
+/// Of rivals, all but the one with the most distinct matches (then the most matches) go; that
+/// one stays only with at least kMinDistinct distinct matches and kDistinctMargin more than
+/// any rival had. Otherwise which product lies there is not known, and none is reported.
+/// Any instance, rivals or not, needs at least `min_distinct_alone` distinct matches (the
+/// detector asks for half of min-matches).
+void drop_look_alikes(std::vector<Instance>& instances, int min_distinct_alone);
 
 } // namespace pickdetect::detail

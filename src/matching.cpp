@@ -6,6 +6,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/flann.hpp>
 
+#include <algorithm>
 #include <mutex>
 
 namespace pickdetect {
@@ -19,6 +20,11 @@ constexpr int kKdChecks = 32;
 constexpr unsigned kKdSeed = 20240101u;
 /// Scene descriptors are searched in blocks of this many rows, in parallel.
 constexpr int kSearchBlock = 256;
+/// Ambiguity::Share: neighbours searched per scene descriptor (two per model, at most this).
+constexpr int kMaxNeighbours = 16;
+/// Ambiguity::Share: a model's nearest descriptor within 1 / kNearlyAsGood of the nearest of
+/// all fits about as well as the best.
+constexpr float kNearlyAsGood = 0.9f;
 
 std::mutex& flann_build_lock() {
   static std::mutex lock;
@@ -46,22 +52,26 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
   }
 }
 
-std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio,
-                                  Search search) const {
+std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio, Search search,
+                                  Ambiguity ambiguity) const {
   std::vector<Match> matches;
   if (descriptors_.rows < 2 || scene_descriptors.empty() ||
       scene_descriptors.type() != descriptors_.type() ||
       scene_descriptors.cols != descriptors_.cols)
     return matches;
   const int n = scene_descriptors.rows;
-  // Nearest two per scene row: indices and distances (squared L2 from FLANN).
-  cv::Mat indices(n, 2, CV_32S), distances(n, 2, CV_32F);
+  const int n_models = static_cast<int>(offset_.size());
+  // Sharing needs each model's two nearest among the neighbours: a few per model.
+  const int k = ambiguity == Ambiguity::Share
+                    ? std::min(descriptors_.rows, std::clamp(2 * n_models, 2, kMaxNeighbours))
+                    : 2;
+  cv::Mat indices(n, k, CV_32S), distances(n, k, CV_32F);
   if (kind_ == FeatureKind::Sift && search == Search::KdTree && index_) {
     cv::parallel_for_(cv::Range(0, (n + kSearchBlock - 1) / kSearchBlock), [&](const cv::Range& r) {
       for (int b = r.start; b < r.end; ++b) {
         const cv::Range rows(b * kSearchBlock, std::min(n, (b + 1) * kSearchBlock));
         cv::Mat idx = indices.rowRange(rows), dist = distances.rowRange(rows);
-        index_->knnSearch(scene_descriptors.rowRange(rows), idx, dist, 2,
+        index_->knnSearch(scene_descriptors.rowRange(rows), idx, dist, k,
                           cv::flann::SearchParams(kKdChecks));
       }
     });
@@ -69,32 +79,69 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
   } else {
     cv::BFMatcher bf(kind_ == FeatureKind::Orb ? cv::NORM_HAMMING : cv::NORM_L2);
     std::vector<std::vector<cv::DMatch>> knn;
-    bf.knnMatch(scene_descriptors, descriptors_, knn, 2);
-    for (int i = 0; i < n; ++i) {
-      const bool two = knn[i].size() == 2;
-      indices.at<int>(i, 0) = two ? knn[i][0].trainIdx : -1;
-      indices.at<int>(i, 1) = two ? knn[i][1].trainIdx : -1;
-      distances.at<float>(i, 0) = two ? knn[i][0].distance : 0.f;
-      distances.at<float>(i, 1) = two ? knn[i][1].distance : 0.f;
+    bf.knnMatch(scene_descriptors, descriptors_, knn, k);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < k; ++j) {
+        const bool have = j < static_cast<int>(knn[i].size());
+        indices.at<int>(i, j) = have ? knn[i][j].trainIdx : -1;
+        distances.at<float>(i, j) = have ? knn[i][j].distance : 0.f;
+      }
+  }
+  std::vector<int> first(n_models);
+  for (int i = 0; i < n; ++i) {
+    const int* idx = indices.ptr<int>(i);
+    const float* dist = distances.ptr<float>(i);
+    int valid = 0;
+    while (valid < k && idx[valid] >= 0 && idx[valid] < descriptors_.rows)
+      ++valid;
+    if (valid < 2)
+      continue;
+    if (ambiguity == Ambiguity::Reject) {
+      const float r = dist[1] > 0.f ? dist[0] / dist[1] : 1.f;
+      if (r < ratio)
+        matches.push_back(make_match(idx[0], i, dist[0], r));
+      continue;
+    }
+    // The look-alikes of this feature: the models whose nearest descriptor fits nearly as
+    // well as the best of all (first[m]: that neighbour's rank, -1 for the other models).
+    std::fill(first.begin(), first.end(), -1);
+    for (int j = 0; j < valid; ++j) {
+      const int m = owner_[idx[j]];
+      if (first[m] < 0 && dist[j] * kNearlyAsGood <= dist[0])
+        first[m] = j;
+    }
+    // The ratio test's second neighbour: the nearest that is none of those (without one among
+    // the neighbours, the farthest bounds it below). With no look-alike this is the plain test.
+    float second = dist[valid - 1];
+    for (int j = 0; j < valid; ++j)
+      if (first[owner_[idx[j]]] != j) {
+        second = dist[j];
+        break;
+      }
+    const long look_alikes =
+        std::count_if(first.begin(), first.end(), [](int j) { return j >= 0; });
+    for (int m = 0; m < n_models; ++m) {
+      if (first[m] < 0)
+        continue;
+      const float d = dist[first[m]];
+      const float r = second > 0.f ? d / second : 1.f;
+      if (r >= ratio)
+        continue;
+      matches.push_back(make_match(idx[first[m]], i, d, r));
+      matches.back().shared = look_alikes > 1;
     }
   }
-  for (int i = 0; i < n; ++i) {
-    const int best = indices.at<int>(i, 0);
-    const float d1 = distances.at<float>(i, 0), d2 = distances.at<float>(i, 1);
-    if (best < 0 || indices.at<int>(i, 1) < 0 || best >= descriptors_.rows)
-      continue;
-    const float r = d2 > 0.f ? d1 / d2 : 1.f;
-    if (r >= ratio)
-      continue;
-    Match m;
-    m.model = owner_[best];
-    m.model_point = best - offset_[m.model];
-    m.scene_point = i;
-    m.distance = d1;
-    m.ratio = r;
-    matches.push_back(m);
-  }
   return matches;
+}
+
+Match Matcher::make_match(int row, int scene_point, float distance, float ratio) const {
+  Match m;
+  m.model = owner_[row];
+  m.model_point = row - offset_[m.model];
+  m.scene_point = scene_point;
+  m.distance = distance;
+  m.ratio = ratio;
+  return m;
 }
 
 } // namespace pickdetect

@@ -79,6 +79,7 @@ std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bo
     Instance inst;
     place(inst, ms.model, fit.homography);
     inst.matches = static_cast<int>(fit.inliers.size());
+    inst.distinct_matches = inst.matches;
     for (int k : fit.inliers)
       inst.support.push_back(ms.scene_keypoints[ms.matches[g[k]].scene_point].pt);
     found.push_back(std::move(inst));

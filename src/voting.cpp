@@ -91,6 +91,12 @@ constexpr double kRotationBandwidthDeg = 20.0;
 constexpr size_t kSparseInliers = 6;
 constexpr double kMaxSparseRmsPx = 1.25;
 
+/// How many of the given matches fitted no other model about as well (see Ambiguity::Share).
+int distinct_among(const ModelScene& ms, const std::vector<int>& idx) {
+  return static_cast<int>(
+      std::count_if(idx.begin(), idx.end(), [&](int i) { return !ms.matches[i].shared; }));
+}
+
 /// Splits a centre cluster's votes (indices into ms.votes) by their rotation, largest first.
 std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
                                                 const std::vector<int>& members) {
@@ -185,6 +191,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       continue;
     Instance inst;
     inst.matches = static_cast<int>(members.size());
+    inst.distinct_matches = inst.matches;
     place(inst, ms.model, pose);
     if (s.refine) {
       std::vector<int> in = refine_pose(ms, pose, s.allow_scale, claimed);
@@ -203,6 +210,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       for (int i : in)
         claimed[i] = 1;
       inst.matches = static_cast<int>(in.size());
+      inst.distinct_matches = distinct_among(ms, in);
       inst.support = scene_points(ms, in);
     } else {
       inst.support = scene_points(ms, members);

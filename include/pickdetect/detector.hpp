@@ -50,7 +50,11 @@ struct Instance {
   double angle = 0.0; ///< Degrees in [0, 360), clockwise on screen (image y axis down).
   double scale = 1.0; ///< Scene size / model size.
   int matches = 0;    ///< Matches that support the instance.
-  double score = 0.0; ///< Confidence in [0, 1].
+  /// Of those, the matches whose scene feature fitted no other model about as well: the evidence
+  /// for which product this is (look-alike products share parts of their design). All of them
+  /// for the RANSAC baselines and plain voting, whose matching drops such features.
+  int distinct_matches = 0;
+  double score = 0.0;                          ///< Confidence in [0, 1].
   cv::Matx33d homography = cv::Matx33d::eye(); ///< Carries model pixels into the scene.
   std::vector<cv::Point2f> support;            ///< Scene positions of the supporting keypoints.
   /// Estimated share of the outline that is seen: inside the frame and under no other instance.

@@ -41,6 +41,7 @@ struct Match {
   int scene_point = 0;  ///< Keypoint index in the scene.
   float distance = 0.f; ///< Descriptor distance to the nearest neighbour.
   float ratio = 0.f;    ///< Nearest / second nearest distance (lower is more distinctive).
+  bool shared = false;  ///< The scene feature fits other models about as well (Ambiguity::Share).
 };
 
 } // namespace pickdetect

@@ -21,10 +21,23 @@ enum class Search {
   BruteForce, ///< Every pair compared: exact, several times slower on large frames.
 };
 
-/// Matches scene descriptors against the descriptors of every model at once: the two nearest
-/// neighbours of a scene descriptor are searched over all models together, so a scene feature
-/// that fits two models about equally well fails the ratio test and decides for neither.
-/// Immutable once built; copies share the search index.
+/// What the matching does with a scene feature that fits several models about equally well
+/// (look-alike products share parts of their design).
+enum class Ambiguity {
+  /// The two nearest neighbours are searched over all models together: such a feature fails
+  /// the ratio test and decides for none (the paper's matching).
+  Reject,
+  /// The models whose nearest descriptor fits nearly as well as the best of all are the
+  /// feature's look-alikes. Each of their nearest is tested against the nearest descriptor
+  /// that is none of theirs, and each that passes gets a match, marked `shared` when there
+  /// are several look-alikes. Which product the object is must then be decided from the
+  /// instances. Without look-alikes this is the same test as Reject.
+  Share,
+};
+
+/// Matches scene descriptors against the descriptors of every model at once (one search index
+/// over all of them); a scene feature that fits several models about equally well is rejected
+/// or shared, as asked (Ambiguity). Immutable once built; copies share the search index.
 class Matcher {
 public:
   Matcher() = default;
@@ -33,13 +46,17 @@ public:
   explicit Matcher(const std::vector<Model>& models, FeatureKind kind = FeatureKind::Sift);
 
   /// Matches with the 2NN ratio test: nearest / second nearest distance below `ratio`.
-  /// The result is ordered by scene keypoint and does not depend on threads or timing.
+  /// The result is ordered by scene keypoint (then model) and does not depend on threads or
+  /// timing.
   std::vector<Match> match(const cv::Mat& scene_descriptors, double ratio,
-                           Search search = Search::KdTree) const;
+                           Search search = Search::KdTree,
+                           Ambiguity ambiguity = Ambiguity::Reject) const;
 
   bool empty() const { return descriptors_.empty(); }
 
 private:
+  Match make_match(int row, int scene_point, float distance, float ratio) const;
+
   FeatureKind kind_ = FeatureKind::Sift;
   cv::Mat descriptors_;     ///< All models' descriptors, stacked.
   std::vector<int> owner_;  ///< Row -> model index.

@@ -226,6 +226,33 @@ TEST(Matcher, AFeatureThatFitsTwoModelsEquallyDecidesForNeither) {
   EXPECT_TRUE(Matcher({a, twin}).match(scene.descriptors, 0.8).empty());
 }
 
+TEST(Matcher, SharingGivesAFeatureToEveryLookAlike) {
+  const Model a = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  Model twin = a;
+  twin.name = "twin";
+  const Model other = load_model(std::string(PICKDETECT_TEST_DATA) + "/graf1.png");
+  const cv::Mat scene = a.sift.descriptors;
+  const std::vector<Match> matches =
+      Matcher({a, twin, other}).match(scene, 0.8, Search::BruteForce, Ambiguity::Share);
+  size_t per_model[3] = {0, 0, 0};
+  for (const Match& m : matches) {
+    ++per_model[m.model];
+    EXPECT_TRUE(m.shared || m.model == 2);
+  }
+  EXPECT_GT(per_model[0], a.sift.keypoints.size() / 2);
+  EXPECT_EQ(per_model[0], per_model[1]);
+  EXPECT_LT(per_model[2], per_model[0] / 20);
+  // With one model, sharing changes nothing.
+  const Matcher alone({a});
+  const std::vector<Match> reject = alone.match(scene, 0.8, Search::BruteForce);
+  const std::vector<Match> share = alone.match(scene, 0.8, Search::BruteForce, Ambiguity::Share);
+  ASSERT_EQ(reject.size(), share.size());
+  for (size_t i = 0; i < reject.size(); ++i) {
+    EXPECT_EQ(reject[i].model_point, share[i].model_point);
+    EXPECT_FALSE(share[i].shared);
+  }
+}
+
 TEST(Occlusion, OverlapAreaOfCrossingAndTouchingOutlines) {
   const std::vector<cv::Point2f> a = {{0, 0}, {100, 0}, {100, 100}, {0, 100}};
   const std::vector<cv::Point2f> b = {{50, 50}, {150, 50}, {150, 150}, {50, 150}};
@@ -328,6 +355,7 @@ Instance placed(int model, std::vector<cv::Point2f> outline, std::vector<cv::Poi
   inst.outline = std::move(outline);
   inst.support = std::move(support);
   inst.matches = static_cast<int>(inst.support.size());
+  inst.distinct_matches = inst.matches;
   return inst;
 }
 
@@ -348,32 +376,75 @@ TEST(LookAlikes, TheWeakerOfTwoModelsInTheSamePlaceGoes) {
   // Model 1 found where model 0 is, nearly the same outline, its 5 keypoints on model 0's.
   std::vector<Instance> found = {placed(0, square(100, 100, 200), spread(120, 120, 60)),
                                  placed(1, square(103, 98, 200), spread(150, 150, 5))};
-  detail::drop_look_alikes(found);
+  detail::drop_look_alikes(found, 3);
   ASSERT_EQ(found.size(), 1u);
   EXPECT_EQ(found[0].model, 0);
   // Whichever comes first: the stronger one stays.
   found = {placed(1, square(103, 98, 200), spread(150, 150, 5)),
            placed(0, square(100, 100, 200), spread(120, 120, 60))};
-  detail::drop_look_alikes(found);
+  detail::drop_look_alikes(found, 3);
   ASSERT_EQ(found.size(), 1u);
   EXPECT_EQ(found[0].model, 0);
+}
+
+/// `inst` with `distinct` of its matches its own.
+Instance with_distinct(Instance inst, int distinct) {
+  inst.distinct_matches = distinct;
+  return inst;
+}
+
+TEST(LookAlikes, TheProductIsNamedByItsDistinctMatches) {
+  // Two models on the same keypoints (a shared design): model 1 has more matches, model 0
+  // more of its own.
+  std::vector<Instance> found = {
+      with_distinct(placed(0, square(100, 100, 200), spread(120, 120, 60)), 40),
+      with_distinct(placed(1, square(101, 99, 200), spread(120, 120, 62)), 2)};
+  detail::drop_look_alikes(found, 3);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model, 0);
+  // The same on the same keypoints elsewhere: the shared design placed differently in model 1.
+  found = {with_distinct(placed(0, square(100, 100, 200), spread(120, 120, 60)), 40),
+           with_distinct(placed(1, square(90, 40, 150), spread(120, 120, 30)), 4)};
+  detail::drop_look_alikes(found, 3);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model, 0);
+}
+
+TEST(LookAlikes, NoProductIsNamedWhenNoneStandsOut) {
+  // Own evidence too close to a rival's, or too little of it: which product lies there is not
+  // known.
+  for (const auto& [first, second] : {std::pair{7, 5}, std::pair{5, 0}}) {
+    std::vector<Instance> found = {
+        with_distinct(placed(0, square(100, 100, 200), spread(120, 120, 40)), first),
+        with_distinct(placed(1, square(101, 99, 200), spread(120, 120, 40)), second)};
+    detail::drop_look_alikes(found, 3);
+    EXPECT_TRUE(found.empty()) << first << " against " << second << " distinct matches";
+  }
+  // Alone, an instance needs the given number of distinct matches.
+  std::vector<Instance> found = {
+      with_distinct(placed(0, square(100, 100, 200), spread(120, 120, 20)), 2)};
+  detail::drop_look_alikes(found, 3);
+  EXPECT_TRUE(found.empty());
+  found = {with_distinct(placed(0, square(100, 100, 200), spread(120, 120, 20)), 3)};
+  detail::drop_look_alikes(found, 3);
+  EXPECT_EQ(found.size(), 1u);
 }
 
 TEST(LookAlikes, OverlappingProductsAndTwoOfOneProductStay) {
   // The same model twice in the same place is not a look-alike (mean shift keeps those apart).
   std::vector<Instance> found = {placed(0, square(100, 100, 200), spread(120, 120, 60)),
                                  placed(0, square(103, 98, 200), spread(150, 150, 5))};
-  detail::drop_look_alikes(found);
+  detail::drop_look_alikes(found, 3);
   EXPECT_EQ(found.size(), 2u);
   // A product lying half over another: outlines overlap, but far from the same place.
   found = {placed(0, square(100, 100, 200), spread(120, 120, 60)),
            placed(1, square(200, 100, 200), spread(310, 120, 20))};
-  detail::drop_look_alikes(found);
+  detail::drop_look_alikes(found, 3);
   EXPECT_EQ(found.size(), 2u);
   // Nearly the same outline, but the weaker one's keypoints lie outside the stronger one's:
   // its evidence is its own.
   found = {placed(0, square(100, 100, 200), spread(120, 120, 60)),
            placed(1, square(100, 110, 200), spread(150, 303, 6))};
-  detail::drop_look_alikes(found);
+  detail::drop_look_alikes(found, 3);
   EXPECT_EQ(found.size(), 2u);
 }
