@@ -11,6 +11,7 @@
 #include <glib/gstdio.h>
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -259,6 +260,34 @@ TEST_F(Synth, ConveyorClip) {
   for (const Scene& s : ds.scenes)
     instances += static_cast<int>(s.instances.size());
   EXPECT_GT(instances, 0);
+}
+
+TEST_F(Synth, FamilyOfLookAlikes) {
+  ASSERT_EQ(
+      synth({"--scenes", "1", "--size", "320x240", "--scale", "0.4-0.5", "--family", "0.6", "--out",
+             path("family"), picture("box.png"), picture("fruits.jpg"), picture("home.jpg")}),
+      0)
+      << stderr_;
+  const Dataset ds = load_dataset(path("family"));
+  ASSERT_EQ(ds.models.size(), 2u);
+  const cv::Mat box = cv::imread(picture("box.png"));
+  const cv::Mat a = cv::imread(path("family/models/box_fruits.png"));
+  const cv::Mat b = cv::imread(path("family/models/box_home.png"));
+  ASSERT_FALSE(a.empty());
+  ASSERT_FALSE(b.empty());
+  ASSERT_EQ(a.size(), box.size());
+  // The top 60 % is the design picture in both products; the rest differs between them.
+  const int top = static_cast<int>(std::lround(0.6 * box.rows));
+  EXPECT_EQ(cv::norm(a.rowRange(0, top), box.rowRange(0, top), cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(b.rowRange(0, top), box.rowRange(0, top), cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::norm(a.rowRange(top, a.rows), b.rowRange(top, b.rows), cv::NORM_L1),
+            10.0 * a.cols * (a.rows - top));
+
+  EXPECT_NE(synth({"--family", "1.5", "--out", path("x"), picture("box.png"), picture("home.jpg")}),
+            0);
+  EXPECT_NE(stderr_.find("--family"), std::string::npos) << stderr_;
+  EXPECT_NE(synth({"--family", "0.5", "--out", path("x"), picture("box.png")}), 0);
+  EXPECT_NE(stderr_.find("--family"), std::string::npos) << stderr_;
 }
 
 TEST_F(Synth, RefusesBadInput) {

@@ -519,6 +519,28 @@ void progress(const char* what, int done, int total) {
   std::fflush(stderr);
 }
 
+/// A family of look-alike products: the first picture's top `share` of its height (a brand's
+/// design) over each further picture in turn, squeezed into the rest. Named first_other; the
+/// first picture's outline, alpha and principal points are kept.
+std::vector<ModelPicture> make_family(const std::vector<ModelPicture>& pictures, double share) {
+  const ModelPicture& design = pictures[0];
+  const int top = static_cast<int>(std::lround(share * design.bgr.rows));
+  if (top < 1 || top >= design.bgr.rows)
+    throw Failure("--family leaves no shared design or no own part of '" + design.name + "'");
+  const cv::Rect own(0, top, design.bgr.cols, design.bgr.rows - top);
+  std::vector<ModelPicture> family;
+  for (size_t i = 1; i < pictures.size(); ++i) {
+    ModelPicture product = design;
+    product.bgr = design.bgr.clone();
+    product.alpha = design.alpha.clone();
+    product.name = design.name + "_" + pictures[i].name;
+    product.source = pictures[i].source;
+    cv::resize(pictures[i].bgr, product.bgr(own), own.size(), 0, 0, cv::INTER_AREA);
+    family.push_back(std::move(product));
+  }
+  return family;
+}
+
 int run(int argc, char** argv) {
   gint scenes = 10;
   gchar* size = nullptr;
@@ -531,6 +553,7 @@ int run(int argc, char** argv) {
   gchar* name = nullptr;
   gdouble tilt = 8.0;
   gdouble fps = 10.0;
+  gdouble family = 0.0;
   gint64 seed = 1;
   gint distractors = 3;
   gboolean mixed = FALSE;
@@ -546,6 +569,10 @@ int run(int argc, char** argv) {
        "Mix the models within a scene (default: one model per scene, in turn)", nullptr},
       {"distractors", 0, 0, G_OPTION_ARG_INT, &distractors,
        "Distractor objects on the floor per scene (3)", "N"},
+      {"family", 0, 0, G_OPTION_ARG_DOUBLE, &family,
+       "Look-alike products: the first picture's top SHARE of its height (0 < SHARE < 1) is "
+       "their common design, each further picture fills the rest of one product",
+       "SHARE"},
       {"seed", 0, 0, G_OPTION_ARG_INT64, &seed, "Random seed (1)", "N"},
       {"out", 'o', 0, G_OPTION_ARG_FILENAME, &out_dir,
        "Write an annotated dataset here (dataset.json, models/, scenes/)", "DIR"},
@@ -616,6 +643,14 @@ int run(int argc, char** argv) {
     for (size_t i = 0; i + 1 < models.size(); ++i)
       if (models[i].name == models.back().name)
         models.back().name += "_" + std::to_string(models.size());
+  }
+  if (family != 0.0) {
+    if (!(family > 0.0 && family < 1.0))
+      throw Failure("--family wants a share of the height between 0 and 1, got " +
+                    std::to_string(family));
+    if (models.size() < 2)
+      throw Failure("--family needs the design picture and at least one more");
+    models = make_family(models, family);
   }
   const int margin = margin_for(models, s);
   Random rng(static_cast<uint64_t>(seed));
