@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
-// Matching: 2NN ratio test of scene descriptors against all models' descriptors at once.
+// Matching: the 2NN ratio test of scene descriptors against all models' descriptors at once,
+// rejecting or sharing the features that fit several models (look-alikes) about equally well.
 #include <pickdetect/matching.hpp>
 
 #include <opencv2/core/utility.hpp>
@@ -52,6 +53,33 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
   }
 }
 
+void Matcher::nearest(const cv::Mat& queries, int k, Search search, cv::Mat& indices,
+                      cv::Mat& distances) const {
+  const int n = queries.rows;
+  indices.create(n, k, CV_32S);
+  distances.create(n, k, CV_32F);
+  if (kind_ == FeatureKind::Sift && search == Search::KdTree && index_) {
+    cv::parallel_for_(cv::Range(0, (n + kSearchBlock - 1) / kSearchBlock), [&](const cv::Range& r) {
+      for (int b = r.start; b < r.end; ++b) {
+        const cv::Range rows(b * kSearchBlock, std::min(n, (b + 1) * kSearchBlock));
+        cv::Mat idx = indices.rowRange(rows), dist = distances.rowRange(rows);
+        index_->knnSearch(queries.rowRange(rows), idx, dist, k, cv::flann::SearchParams(kKdChecks));
+      }
+    });
+    cv::sqrt(distances, distances); // FLANN gives squared L2
+    return;
+  }
+  cv::BFMatcher bf(kind_ == FeatureKind::Orb ? cv::NORM_HAMMING : cv::NORM_L2);
+  std::vector<std::vector<cv::DMatch>> knn;
+  bf.knnMatch(queries, descriptors_, knn, k);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < k; ++j) {
+      const bool have = j < static_cast<int>(knn[i].size());
+      indices.at<int>(i, j) = have ? knn[i][j].trainIdx : -1;
+      distances.at<float>(i, j) = have ? knn[i][j].distance : 0.f;
+    }
+}
+
 std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio, Search search,
                                   Ambiguity ambiguity) const {
   std::vector<Match> matches;
@@ -60,33 +88,14 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
       scene_descriptors.cols != descriptors_.cols)
     return matches;
   const int n = scene_descriptors.rows;
+  // Sharing needs a few neighbours per model (each model's nearest, and the nearest that is
+  // none of the look-alikes'); the plain test needs two.
   const int n_models = static_cast<int>(offset_.size());
-  // Sharing needs each model's two nearest among the neighbours: a few per model.
   const int k = ambiguity == Ambiguity::Share
                     ? std::min(descriptors_.rows, std::clamp(2 * n_models, 2, kMaxNeighbours))
                     : 2;
-  cv::Mat indices(n, k, CV_32S), distances(n, k, CV_32F);
-  if (kind_ == FeatureKind::Sift && search == Search::KdTree && index_) {
-    cv::parallel_for_(cv::Range(0, (n + kSearchBlock - 1) / kSearchBlock), [&](const cv::Range& r) {
-      for (int b = r.start; b < r.end; ++b) {
-        const cv::Range rows(b * kSearchBlock, std::min(n, (b + 1) * kSearchBlock));
-        cv::Mat idx = indices.rowRange(rows), dist = distances.rowRange(rows);
-        index_->knnSearch(scene_descriptors.rowRange(rows), idx, dist, k,
-                          cv::flann::SearchParams(kKdChecks));
-      }
-    });
-    cv::sqrt(distances, distances);
-  } else {
-    cv::BFMatcher bf(kind_ == FeatureKind::Orb ? cv::NORM_HAMMING : cv::NORM_L2);
-    std::vector<std::vector<cv::DMatch>> knn;
-    bf.knnMatch(scene_descriptors, descriptors_, knn, k);
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < k; ++j) {
-        const bool have = j < static_cast<int>(knn[i].size());
-        indices.at<int>(i, j) = have ? knn[i][j].trainIdx : -1;
-        distances.at<float>(i, j) = have ? knn[i][j].distance : 0.f;
-      }
-  }
+  cv::Mat indices, distances;
+  nearest(scene_descriptors, k, search, indices, distances);
   std::vector<int> first(n_models);
   for (int i = 0; i < n; ++i) {
     const int* idx = indices.ptr<int>(i);
@@ -111,7 +120,7 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
         first[m] = j;
     }
     // The ratio test's second neighbour: the nearest that is none of those (without one among
-    // the neighbours, the farthest bounds it below). With no look-alike this is the plain test.
+    // the neighbours, the farthest bounds it below).
     float second = dist[valid - 1];
     for (int j = 0; j < valid; ++j)
       if (first[owner_[idx[j]]] != j) {

@@ -55,6 +55,10 @@ public:
   bool empty() const { return descriptors_.empty(); }
 
 private:
+  /// The k nearest model descriptors of each query row (indices, -1 where none; L2 or Hamming
+  /// distances).
+  void nearest(const cv::Mat& queries, int k, Search search, cv::Mat& indices,
+               cv::Mat& distances) const;
   Match make_match(int row, int scene_point, float distance, float ratio) const;
 
   FeatureKind kind_ = FeatureKind::Sift;
