@@ -49,7 +49,7 @@
  * #GstPickDetect:features chooses SIFT (the paper's) or the much cheaper ORB;
  * #GstPickDetect:detection-scale extracts the features from the frame shrunk by that factor
  * (coordinates stay in frame pixels); #GstPickDetect:refine refits each instance on its own
- * inlier matches (off: the paper's plain pose);
+ * inlier matches and shares the features of look-alike models (off: the paper's plain voting);
  * #GstPickDetect:draw draws the instances into the frame (pickable ones outlined in green with
  * their pick order, covered ones in red, each labelled with its model's name);
  * #GstPickDetect:post-messages posts
@@ -975,8 +975,8 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_REFINE,
       g_param_spec_boolean("refine", "Refine",
-                           "Refit each instance's pose on its own inlier matches (off: the "
-                           "paper's plain pose from the votes)",
+                           "Refit each instance's pose on its own inlier matches and share the "
+                           "features of look-alike models (off: the paper's plain voting)",
                            DEFAULT_REFINE, flags));
   g_object_class_install_property(
       gobject_class, PROP_DRAW,

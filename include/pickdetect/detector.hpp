@@ -31,7 +31,9 @@ struct Settings {
   double bandwidth = 0.0;  ///< Mean-shift bandwidth in scene pixels; 0 = automatic.
   int max_instances = 0;   ///< At most this many instances per frame, best first; 0 = no limit.
   bool allow_scale = true; ///< Votes use the keypoints' scale ratio (else scale is fixed at 1).
-  bool refine = true;      ///< Refit each instance's pose on its own inlier matches (robustly).
+  /// Voting: refit each instance's pose on its own inlier matches (robustly), and share the
+  /// features of look-alike models (Ambiguity::Share). False: the paper's plain voting.
+  bool refine = true;
   Search search = Search::KdTree;           ///< Nearest-neighbour search of the matching.
   FeatureKind features = FeatureKind::Sift; ///< SIFT (the paper's) or ORB (fast).
   /// Features are extracted from the frame shrunk by this factor (0 < f <= 1), then carried back

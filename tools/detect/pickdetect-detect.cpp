@@ -91,7 +91,9 @@ int main(int argc, char** argv) {
       {"no-scale", 0, 0, G_OPTION_ARG_NONE, &no_scale,
        "Assume the objects are at the model's scale (the paper's assumption)", nullptr},
       {"no-refine", 0, 0, G_OPTION_ARG_NONE, &no_refine,
-       "Keep the paper's pose from the principal points' modes (no refit on inliers)", nullptr},
+       "The paper's plain voting: the pose from the principal points' modes (no refit on "
+       "inliers), features that fit several models alike rejected",
+       nullptr},
       {"exact", 0, 0, G_OPTION_ARG_NONE, &exact,
        "Match by brute force (exact) instead of FLANN kd-trees", nullptr},
       {"json", 0, 0, G_OPTION_ARG_NONE, &json,
