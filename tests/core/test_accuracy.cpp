@@ -57,7 +57,8 @@ cv::Mat make_heap(const std::vector<cv::Mat>& boxes, const std::vector<cv::Mat>&
             static_cast<float>(rng.uniform(150.0, frame.height - 150.0))},
            rng.uniform(0.0, 360.0),
            rng.uniform(min_scale, max_scale)};
-    const int model = rng.uniform(0, static_cast<int>(boxes.size()));
+    // One box kind draws nothing, so the single-model heaps stay the scenes they were.
+    const int model = boxes.size() > 1 ? rng.uniform(0, static_cast<int>(boxes.size())) : 0;
     test_scene::paste(scene, boxes[model], {p});
     cv::Mat mask;
     cv::warpAffine(ones, mask, cv::Mat(test_scene::model_to_scene(box.size(), p)), frame,
