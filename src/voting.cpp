@@ -97,6 +97,37 @@ int distinct_among(const ModelScene& ms, const std::vector<int>& idx) {
       std::count_if(idx.begin(), idx.end(), [&](int i) { return !ms.matches[i].shared; }));
 }
 
+/// The pose a single match gives: its keypoints' rotation and size ratio, its model keypoint
+/// carried onto its scene keypoint.
+Similarity pose_of_match(const ModelScene& ms, int i) {
+  const Match& m = ms.matches[i];
+  Similarity pose{ms.votes[i].angle, ms.votes[i].scale, {0.0, 0.0}};
+  const cv::Point2f at = pose.apply(ms.model_keypoints[m.model_point].pt);
+  const cv::Point2f seen = ms.scene_keypoints[m.scene_point].pt;
+  pose.translation = cv::Point2d(seen.x - at.x, seen.y - at.y);
+  return pose;
+}
+
+/// The modes of a few scattered votes can put the pose some pixels off, beyond the inlier
+/// distance, so that refining it finds no inliers (a small object voting with few matches).
+/// Then each member's own pose is refined in turn and the one with the most inliers kept.
+std::vector<int> refine_from_members(const ModelScene& ms, const std::vector<int>& members,
+                                     bool allow_scale, const std::vector<char>& claimed,
+                                     Similarity& pose) {
+  std::vector<int> best;
+  for (int i : members) {
+    if (claimed[i])
+      continue;
+    Similarity candidate = pose_of_match(ms, i);
+    std::vector<int> in = refine_pose(ms, candidate, allow_scale, claimed);
+    if (in.size() > best.size()) {
+      best = std::move(in);
+      pose = candidate;
+    }
+  }
+  return best;
+}
+
 /// Splits a centre cluster's votes (indices into ms.votes) by their rotation, largest first.
 std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
                                                 const std::vector<int>& members) {
@@ -195,6 +226,8 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
     place(inst, ms.model, pose);
     if (s.refine) {
       std::vector<int> in = refine_pose(ms, pose, s.allow_scale, claimed);
+      if (static_cast<int>(in.size()) < s.min_matches)
+        in = refine_from_members(ms, members, s.allow_scale, claimed, pose);
       if (static_cast<int>(in.size()) < s.min_matches)
         continue;
       cv::Matx33d h;
