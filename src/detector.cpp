@@ -165,8 +165,10 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
       result.instances.push_back(std::move(inst));
     }
   }
-  if (share)
+  if (share) {
     detail::drop_look_alikes(result.instances, (std::max(1, s.min_matches) + 1) / 2);
+    drop_hidden_instances(result.instances, models_, s.features);
+  }
   // Best first; the order depends only on the instances, never on timing.
   std::stable_sort(result.instances.begin(), result.instances.end(),
                    [](const Instance& a, const Instance& b) {

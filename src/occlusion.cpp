@@ -130,6 +130,33 @@ int which_on_top(const Instance& a, const Model& model_a, const Instance& b, con
   return 0;
 }
 
+void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<Model>& models,
+                           FeatureKind kind) {
+  const size_t n = instances.size();
+  std::vector<char> drop(n, 0);
+  for (size_t w = 0; w < n; ++w) {
+    const Instance& weak = instances[w];
+    for (size_t s = 0; s < n && !drop[w]; ++s) {
+      const Instance& other = instances[s];
+      if (s == w || drop[s] || weak.support.empty())
+        continue;
+      // Cheap first: most of w's evidence must lie where the two overlap.
+      const std::vector<cv::Point2f> region = shared_area(other, weak);
+      if (region.size() < 3 ||
+          2 * count_inside(weak.support, region) < static_cast<int>(weak.support.size()))
+        continue;
+      // Features only: the pixel comparison, made for pick safety, errs both ways.
+      if (which_on_top(other, models[other.model], weak, models[weak.model], cv::Mat(), kind) > 0)
+        drop[w] = 1;
+    }
+  }
+  std::vector<Instance> kept;
+  for (size_t i = 0; i < n; ++i)
+    if (!drop[i])
+      kept.push_back(std::move(instances[i]));
+  instances = std::move(kept);
+}
+
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
                       const cv::Size& frame_size, const cv::Mat& grey, FeatureKind kind) {
   const size_t n = instances.size();

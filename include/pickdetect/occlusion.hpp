@@ -32,6 +32,15 @@ double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Poi
 int which_on_top(const Instance& a, const Model& model_a, const Instance& b, const Model& model_b,
                  const cv::Mat& grey = cv::Mat(), FeatureKind kind = FeatureKind::Sift);
 
+/// Drops the instances whose own evidence lies hidden: when most of an instance's supporting
+/// keypoints lie where the features show another instance on top of it (which_on_top without
+/// the pixels), they cannot show this instance; a few of its features matched that other
+/// object's surface (letters of a box's print matching other letters, say). A box truly lying
+/// under another keeps its evidence outside the one on top, and one lying on top hides the
+/// other's features. Run before assess_occlusion; `models` and `kind` as there.
+void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<Model>& models,
+                           FeatureKind kind = FeatureKind::Sift);
+
 /// For every instance: `covered` (instances on it hide more than kCoverTolerance of its
 /// outline, counting those of which it cannot be told which one is on top),
 /// `visibility` (share of its outline inside the frame and under no instance on top of it),

@@ -122,3 +122,13 @@ TEST(Occlusion, PickOrderFollowsTheScore) {
   EXPECT_EQ(inst[1].pick_order, 1);
   EXPECT_EQ(inst[2].pick_order, 2);
 }
+
+TEST(Occlusion, ASmallBoxLyingInsideABigOneIsKept) {
+  // The small box's evidence lies wholly within the big box's outline, but where it lies the big
+  // box shows no features: it is on top, not a few of the big box's features matching wrongly.
+  const Pose lower{{450.f, 350.f}, 10.0, 1.2}, upper{{470.f, 360.f}, 70.0, 0.45};
+  const std::vector<Instance> found = detect_stack({lower, upper});
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_TRUE(found[0].covered);
+  EXPECT_TRUE(found[1].pickable);
+}
