@@ -142,7 +142,7 @@ enum {
 #define DEFAULT_MODEL nullptr
 constexpr GstPickDetectMethod DEFAULT_METHOD = GST_PICK_DETECT_METHOD_VOTING;
 constexpr double DEFAULT_RATIO = 0.8;
-constexpr int DEFAULT_MIN_MATCHES = 6;
+constexpr int DEFAULT_MIN_MATCHES = 4;
 constexpr double DEFAULT_BANDWIDTH = 0.0;
 constexpr int DEFAULT_MAX_INSTANCES = 0;
 constexpr gboolean DEFAULT_ALLOW_SCALE = TRUE;
@@ -935,10 +935,12 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
                           "2NN ratio test: a match is kept when its nearest descriptor distance "
                           "is below this fraction of the second nearest (0 < ratio < 1)",
                           0.01, 0.99, DEFAULT_RATIO, flags));
-  g_object_class_install_property(gobject_class, PROP_MIN_MATCHES,
-                                  g_param_spec_int("min-matches", "Minimum matches",
-                                                   "Fewest supporting matches an instance needs", 1,
-                                                   G_MAXINT, DEFAULT_MIN_MATCHES, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_MIN_MATCHES,
+      g_param_spec_int("min-matches", "Minimum matches",
+                       "Fewest supporting matches an instance needs (the RANSAC "
+                       "baselines: at least 6)",
+                       1, G_MAXINT, DEFAULT_MIN_MATCHES, flags));
   g_object_class_install_property(
       gobject_class, PROP_BANDWIDTH,
       g_param_spec_double("bandwidth", "Bandwidth",

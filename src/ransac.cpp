@@ -6,6 +6,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 
@@ -14,6 +15,10 @@ namespace {
 
 constexpr int kRansacIterations = 2000;
 constexpr double kRansacConfidence = 0.995;
+/// Four pairs fix a homography, so any four matches fit one exactly: the baselines ask for
+/// this many inliers at least, whatever min-matches says (at 4, ransac-clustered found boxes
+/// in pictures of other textures).
+constexpr int kMinHomographyInliers = 6;
 
 } // namespace
 
@@ -74,7 +79,8 @@ std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bo
   for (const std::vector<int>& g : groups) {
     HomographyFit fit;
     if (!fit_homography_ransac(subset(ms.matches, g), ms.model_keypoints, ms.scene_keypoints,
-                               s.ransac_reprojection_px, s.min_matches, fit))
+                               s.ransac_reprojection_px,
+                               std::max(s.min_matches, kMinHomographyInliers), fit))
       continue;
     Instance inst;
     place(inst, ms.model, fit.homography);

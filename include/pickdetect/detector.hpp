@@ -26,8 +26,10 @@ Method parse_method(const std::string& name);
 /// The numbers that matter, with their units. Defaults are the element's property defaults.
 struct Settings {
   Method method = Method::Voting;
-  double ratio = 0.8;      ///< 2NN ratio test threshold (nearest / second nearest).
-  int min_matches = 6;     ///< Fewest supporting matches an instance needs.
+  double ratio = 0.8; ///< 2NN ratio test threshold (nearest / second nearest).
+  /// Fewest supporting matches an instance needs (the RANSAC baselines: at least 6, as four
+  /// matches always fit a homography).
+  int min_matches = 4;
   double bandwidth = 0.0;  ///< Mean-shift bandwidth in scene pixels; 0 = automatic.
   int max_instances = 0;   ///< At most this many instances per frame, best first; 0 = no limit.
   bool allow_scale = true; ///< Votes use the keypoints' scale ratio (else scale is fixed at 1).

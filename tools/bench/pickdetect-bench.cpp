@@ -18,6 +18,7 @@
 // and is not counted.
 #include "common/scene.hpp"
 
+#include <pickdetect/detector.hpp>
 #include <pickdetect/features.hpp>
 
 #include <opencv2/imgcodecs.hpp>
@@ -42,6 +43,9 @@
 #include <vector>
 
 namespace {
+
+/// The element's (and the core's) default min-matches.
+constexpr int kDefaultMinMatches = pickdetect::Settings{}.min_matches;
 
 using Clock = std::chrono::steady_clock;
 
@@ -70,16 +74,16 @@ struct Config {
   std::string method = "voting";
   std::string features = "sift";
   double detection_scale = 1.0;
-  int threads = 1;     ///< The element's frame threads.
-  int min_matches = 6; ///< The element's min-matches.
-  bool fast = false;   ///< Part of the fast-configuration table.
+  int threads = 1;                      ///< The element's frame threads.
+  int min_matches = kDefaultMinMatches; ///< The element's min-matches.
+  bool fast = false;                    ///< Part of the fast-configuration table.
 
   std::string name() const {
     std::ostringstream s;
     s << features;
     if (detection_scale != 1.0)
       s << " @" << detection_scale;
-    if (min_matches != 6)
+    if (min_matches != kDefaultMinMatches)
       s << " min-matches " << min_matches;
     if (threads != 1)
       s << " x" << threads << " threads";
@@ -403,9 +407,10 @@ int run(int argc, char** argv) {
     int threads;
     int min_matches;
   };
-  const std::vector<Fast> fast = {{"sift", 1.0, 1, 6}, {"sift", 1.0, 2, 6}, {"sift", 0.8, 2, 6},
-                                  {"sift", 0.7, 1, 6}, {"sift", 0.7, 2, 4}, {"sift", 0.6, 1, 6},
-                                  {"sift", 0.6, 2, 4}, {"sift", 0.5, 1, 6}, {"orb", 1.0, 1, 6}};
+  const int d = kDefaultMinMatches;
+  const std::vector<Fast> fast = {{"sift", 1.0, 1, d}, {"sift", 1.0, 2, d}, {"sift", 0.8, 2, d},
+                                  {"sift", 0.7, 1, d}, {"sift", 0.7, 2, d}, {"sift", 0.6, 1, d},
+                                  {"sift", 0.6, 2, d}, {"sift", 0.5, 1, d}, {"orb", 1.0, 1, d}};
 
   const std::string load_before = load_average();
   const Clock::time_point started = Clock::now();

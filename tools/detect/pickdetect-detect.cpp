@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
        "Extract features from the picture shrunk by this factor (default 1)", "F"},
       {"ratio", 0, 0, G_OPTION_ARG_DOUBLE, &ratio, "2NN ratio test threshold (default 0.8)", "R"},
       {"min-matches", 0, 0, G_OPTION_ARG_INT, &min_matches,
-       "Fewest matches an instance needs (default 6)", "N"},
+       "Fewest matches an instance needs (default 4)", "N"},
       {"bandwidth", 0, 0, G_OPTION_ARG_DOUBLE, &bandwidth,
        "Mean-shift bandwidth in pixels (default 0 = automatic)", "PX"},
       {"max-instances", 0, 0, G_OPTION_ARG_INT, &max_instances,
