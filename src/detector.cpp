@@ -126,10 +126,6 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
                           {},
                           {},
                           0.0,
-                          0.f,
-                          {},
-                          0,
-                          0,
                           {}};
     for (const Match& match : matches)
       if (match.model == static_cast<int>(m))

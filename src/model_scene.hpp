@@ -8,6 +8,8 @@
 #include <pickdetect/pose.hpp>
 #include <pickdetect/voting.hpp>
 
+#include "point_grid.hpp"
+
 #include <opencv2/core.hpp>
 
 #include <vector>
@@ -23,16 +25,11 @@ struct ModelScene {
   std::vector<Match> matches;
   std::vector<Vote> votes;
   double bandwidth = 0.0;
-  /// The matches by where their scene keypoints lie: a grid of square cells of `cell` pixels,
-  /// each listing its matches in increasing order (see index_matches).
-  float cell = 0.f;
-  cv::Point2f grid_origin;
-  int grid_cols = 0, grid_rows = 0;
-  std::vector<std::vector<int>> grid;
+  /// The matches' scene positions on a grid (see index_matches).
+  PointGrid match_grid;
 };
 
-/// Fills the grid of `ms` from its matches (cells of half the model's smaller side, at most
-/// 256 x 256 of them).
+/// Fills the match grid of `ms` from its matches (cells of half the model's smaller side).
 void index_matches(ModelScene& ms);
 /// The matches whose scene keypoints lie in `box` (scene pixels), in increasing order.
 std::vector<int> matches_in(const ModelScene& ms, const cv::Rect2f& box);
