@@ -162,7 +162,8 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
     }
   }
   if (share) {
-    detail::drop_look_alikes(result.instances, (std::max(1, s.min_matches) + 1) / 2);
+    const int fewest = std::max(1, s.min_matches);
+    detail::drop_look_alikes(result.instances, fewest / 2 + fewest % 2); // half, rounded up
     drop_hidden_instances(result.instances, models_, s.features);
   }
   // Best first; the order depends only on the instances, never on timing.
