@@ -54,7 +54,10 @@ std::vector<Cluster> centre_clusters(const ModelScene& ms);
 std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s);
 std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bool clustered);
 
-/// Refinement (refine.cpp): refits a similarity pose on its own inlier matches (those not yet
+/// Refinement (refine.cpp): how far, in scene pixels, an inlier's scene keypoint may lie from
+/// where a pose of the given scale puts its model keypoint.
+double inlier_distance(const ModelScene& ms, double scale);
+/// Refits a similarity pose on its own inlier matches (those not yet
 /// `claimed` by a stronger instance) until they settle; returns the inliers.
 std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,
                              const std::vector<char>& claimed);

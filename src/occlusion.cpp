@@ -88,6 +88,24 @@ double correlation(const Instance& inst, const Model& model, const cv::Mat& grey
   return cv::mean(product, mask)[0] / (sf[0] * sm[0]);
 }
 
+/// Bounding box of points (edges on the extreme points; empty input: an empty box at 0).
+cv::Rect2f bounds(const std::vector<cv::Point2f>& points) {
+  if (points.empty())
+    return {};
+  float x0 = points[0].x, y0 = points[0].y, x1 = x0, y1 = y0;
+  for (const cv::Point2f& p : points) {
+    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
+    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+  }
+  return {x0, y0, x1 - x0, y1 - y0};
+}
+
+/// Whether two boxes share a point (edges included).
+bool touch(const cv::Rect2f& a, const cv::Rect2f& b) {
+  return a.x <= b.x + b.width && b.x <= a.x + a.width && a.y <= b.y + b.height &&
+         b.y <= a.y + a.height;
+}
+
 } // namespace
 
 double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
@@ -133,14 +151,20 @@ int which_on_top(const Instance& a, const Model& model_a, const Instance& b, con
 void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<Model>& models,
                            FeatureKind kind) {
   const size_t n = instances.size();
+  // Bounding boxes: of each instance's evidence and of its outline.
+  std::vector<cv::Rect2f> evidence(n), extent(n);
+  for (size_t i = 0; i < n; ++i) {
+    evidence[i] = bounds(instances[i].support);
+    extent[i] = bounds(instances[i].outline);
+  }
   std::vector<char> drop(n, 0);
   for (size_t w = 0; w < n; ++w) {
     const Instance& weak = instances[w];
     for (size_t s = 0; s < n && !drop[w]; ++s) {
       const Instance& other = instances[s];
-      if (s == w || drop[s] || weak.support.empty())
+      if (s == w || drop[s] || weak.support.empty() || !touch(evidence[w], extent[s]))
         continue;
-      // Cheap first: most of w's evidence must lie where the two overlap.
+      // Then most of w's evidence must lie where the two overlap.
       const std::vector<cv::Point2f> region = shared_area(other, weak);
       if (region.size() < 3 ||
           2 * count_inside(weak.support, region) < static_cast<int>(weak.support.size()))

@@ -37,7 +37,7 @@ constexpr double kMaxPerspectiveShift = 0.15;
 /// agrees with the pose's.
 std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, const cv::Matx33d& map,
                             bool allow_scale, const std::vector<char>& claimed) {
-  const double tol = std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * pose.scale);
+  const double tol = inlier_distance(ms, pose.scale);
   // Only matches whose scene keypoints lie where the map puts the model picture can be inliers.
   const cv::Size2f picture(static_cast<float>(ms.model.image.cols),
                            static_cast<float>(ms.model.image.rows));
@@ -83,6 +83,10 @@ std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, const 
 }
 
 } // namespace
+
+double inlier_distance(const ModelScene& ms, double scale) {
+  return std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * scale);
+}
 
 /// Refits the pose on its own inlier matches until the inlier set settles.
 std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,

@@ -110,22 +110,34 @@ Similarity pose_of_match(const ModelScene& ms, int i) {
 
 /// The modes of a few scattered votes can put the pose some pixels off, beyond the inlier
 /// distance, so that refining it finds no inliers (a small object voting with few matches).
-/// Then each member's own pose is refined in turn and the one with the most inliers kept.
+/// Then the member whose own pose carries the most members within the inlier distance is
+/// refined instead.
 std::vector<int> refine_from_members(const ModelScene& ms, const std::vector<int>& members,
                                      bool allow_scale, const std::vector<char>& claimed,
                                      Similarity& pose) {
-  std::vector<int> best;
+  int best = -1;
+  size_t best_count = 1;
   for (int i : members) {
     if (claimed[i])
       continue;
-    Similarity candidate = pose_of_match(ms, i);
-    std::vector<int> in = refine_pose(ms, candidate, allow_scale, claimed);
-    if (in.size() > best.size()) {
-      best = std::move(in);
-      pose = candidate;
+    const Similarity candidate = pose_of_match(ms, i);
+    const double tol = inlier_distance(ms, candidate.scale);
+    size_t count = 0;
+    for (int j : members) {
+      const Match& m = ms.matches[j];
+      const cv::Point2f d = candidate.apply(ms.model_keypoints[m.model_point].pt) -
+                            ms.scene_keypoints[m.scene_point].pt;
+      count += !claimed[j] && d.dot(d) <= tol * tol;
+    }
+    if (count > best_count) {
+      best = i;
+      best_count = count;
     }
   }
-  return best;
+  if (best < 0)
+    return {};
+  pose = pose_of_match(ms, best);
+  return refine_pose(ms, pose, allow_scale, claimed);
 }
 
 /// Splits a centre cluster's votes (indices into ms.votes) by their rotation, largest first.
