@@ -63,10 +63,6 @@ void index_matches(ModelScene& ms) {
   ms.match_grid = PointGrid(std::move(at), std::max(8.0, 0.5 * model_side(ms.model)));
 }
 
-std::vector<int> matches_in(const ModelScene& ms, const cv::Rect2f& box) {
-  return ms.match_grid.inside(box);
-}
-
 std::vector<Cluster> centre_clusters(const ModelScene& ms) {
   std::vector<cv::Point2f> centres;
   centres.reserve(ms.votes.size());

@@ -25,14 +25,13 @@ struct ModelScene {
   std::vector<Match> matches;
   std::vector<Vote> votes;
   double bandwidth = 0.0;
-  /// The matches' scene positions on a grid (see index_matches).
+  /// The matches' scene positions on a grid (see index_matches): match_grid.inside(box)
+  /// gives the matches whose scene keypoints lie in a box, in increasing order.
   PointGrid match_grid;
 };
 
 /// Fills the match grid of `ms` from its matches (cells of half the model's smaller side).
 void index_matches(ModelScene& ms);
-/// The matches whose scene keypoints lie in `box` (scene pixels), in increasing order.
-std::vector<int> matches_in(const ModelScene& ms, const cv::Rect2f& box);
 
 /// The model's smaller side (of its outline's bounding box), in model pixels.
 double model_side(const Model& model);

@@ -160,9 +160,11 @@ void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<M
   std::vector<char> drop(n, 0);
   for (size_t w = 0; w < n; ++w) {
     const Instance& weak = instances[w];
+    if (weak.support.empty())
+      continue;
     for (size_t s = 0; s < n && !drop[w]; ++s) {
       const Instance& other = instances[s];
-      if (s == w || drop[s] || weak.support.empty() || !touch(evidence[w], extent[s]))
+      if (s == w || drop[s] || !touch(evidence[w], extent[s]))
         continue;
       // Then most of w's evidence must lie where the two overlap.
       const std::vector<cv::Point2f> region = shared_area(other, weak);

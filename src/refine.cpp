@@ -60,7 +60,7 @@ std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, const 
   const float margin = static_cast<float>(tol) + 1.f;
   const cv::Rect2f box(x0 - margin, y0 - margin, x1 - x0 + 2.f * margin, y1 - y0 + 2.f * margin);
   std::vector<int> in;
-  for (const int i : matches_in(ms, box)) {
+  for (const int i : ms.match_grid.inside(box)) {
     if (claimed[i])
       continue;
     const Vote& v = ms.votes[i];
