@@ -42,11 +42,39 @@ std::vector<cv::Point2f> shared_area(const Instance& a, const Instance& b) {
   return both;
 }
 
-int count_inside(const std::vector<cv::Point2f>& points, const std::vector<cv::Point2f>& polygon) {
+/// Bounding box of points (edges on the extreme points; empty input: an empty box at 0).
+cv::Rect2f bounds(const std::vector<cv::Point2f>& points) {
+  if (points.empty())
+    return {};
+  float x0 = points[0].x, y0 = points[0].y, x1 = x0, y1 = y0;
+  for (const cv::Point2f& p : points) {
+    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
+    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
+  }
+  return {x0, y0, x1 - x0, y1 - y0};
+}
+
+/// Whether a point lies in a box (edges included).
+bool in_box(const cv::Rect2f& box, const cv::Point2f& p) {
+  return p.x >= box.x && p.x <= box.x + box.width && p.y >= box.y && p.y <= box.y + box.height;
+}
+
+/// How many of the points lie in the polygon (edges included). The polygon test is only run on
+/// the points in its bounding box: it costs far more than the box test, and most points of a
+/// model or an instance lie outside a small shared area.
+template <typename Points, typename Position>
+int count_inside(const Points& points, const std::vector<cv::Point2f>& polygon, Position position) {
+  const cv::Rect2f box = bounds(polygon);
   int n = 0;
-  for (const cv::Point2f& p : points)
-    n += cv::pointPolygonTest(polygon, p, false) >= 0;
+  for (const auto& item : points) {
+    const cv::Point2f p = position(item);
+    n += in_box(box, p) && cv::pointPolygonTest(polygon, p, false) >= 0;
+  }
   return n;
+}
+
+int count_inside(const std::vector<cv::Point2f>& points, const std::vector<cv::Point2f>& polygon) {
+  return count_inside(points, polygon, [](const cv::Point2f& p) { return p; });
 }
 
 /// Share of the model's keypoints lying in `region` (scene pixels) that the instance kept.
@@ -55,11 +83,8 @@ double kept_share(const Instance& inst, const Features& model,
   kept = count_inside(inst.support, region);
   std::vector<cv::Point2f> in_model;
   cv::perspectiveTransform(region, in_model, cv::Mat(inst.homography.inv()));
-  std::vector<cv::Point2f> model_points;
-  model_points.reserve(model.keypoints.size());
-  for (const cv::KeyPoint& k : model.keypoints)
-    model_points.push_back(k.pt);
-  const int expected = count_inside(model_points, in_model);
+  const int expected =
+      count_inside(model.keypoints, in_model, [](const cv::KeyPoint& k) { return k.pt; });
   return expected > 0 ? static_cast<double>(kept) / expected : 0.0;
 }
 
@@ -86,18 +111,6 @@ double correlation(const Instance& inst, const Model& model, const cv::Mat& grey
     return -1.0;
   cv::Mat product = (frame - mf[0]).mul(model_pixels - mm[0]);
   return cv::mean(product, mask)[0] / (sf[0] * sm[0]);
-}
-
-/// Bounding box of points (edges on the extreme points; empty input: an empty box at 0).
-cv::Rect2f bounds(const std::vector<cv::Point2f>& points) {
-  if (points.empty())
-    return {};
-  float x0 = points[0].x, y0 = points[0].y, x1 = x0, y1 = y0;
-  for (const cv::Point2f& p : points) {
-    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
-    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
-  }
-  return {x0, y0, x1 - x0, y1 - y0};
 }
 
 /// Whether two boxes share a point (edges included).
