@@ -214,7 +214,9 @@ bool fit_homography(const std::vector<cv::Point2f>& from, const std::vector<cv::
           0.0, 0.0, 0.0, px / w, py / w, 1.0 / w, -v * px / w, -v * py / w;
       const Eigen::Vector2d r = mapped[i] - y[i];
       const double wt = wts.empty() ? 1.0 : wts[i];
-      jtj.selfadjointView<Eigen::Lower>().rankUpdate(j.transpose(), wt); // Lower half only.
+      // A fixed-size product: Eigen evaluates it in place, where a rank update of the lower
+      // half goes through its general matrix kernel, dear at these sizes.
+      jtj.noalias() += wt * j.transpose() * j;
       jtr.noalias() += wt * j.transpose() * r;
     }
     const Eigen::LDLT<Eigen::Matrix<double, 8, 8>, Eigen::Lower> solver(jtj);
