@@ -2,6 +2,8 @@
 // Instances of different models in one place: the product is named by its distinct matches.
 #include "look_alikes.hpp"
 
+#include "polygon.hpp"
+
 #include <pickdetect/occlusion.hpp>
 
 #include <opencv2/imgproc.hpp>
@@ -32,10 +34,7 @@ bool explains(const Instance& strong, const Instance& weak) {
   const double joint = outline_area(strong) + outline_area(weak) - shared;
   if (!(joint > 0.0) || shared < kSamePlaceIoU * joint)
     return false;
-  size_t inside = 0;
-  for (const cv::Point2f& p : weak.support)
-    inside += cv::pointPolygonTest(strong.outline, p, false) >= 0;
-  return 2 * inside >= weak.support.size();
+  return 2 * static_cast<size_t>(count_inside(weak.support, strong.outline)) >= weak.support.size();
 }
 
 bool by_position(const cv::Point2f& a, const cv::Point2f& b) {

@@ -3,6 +3,8 @@
 // can be picked and in what order.
 #include <pickdetect/occlusion.hpp>
 
+#include "polygon.hpp"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -10,6 +12,10 @@
 
 namespace pickdetect {
 namespace {
+
+using detail::bounds;
+using detail::count_inside;
+using detail::touch;
 
 /// Feature evidence: the upper instance needs at least this many supporting keypoints in the
 /// shared area...
@@ -42,49 +48,13 @@ std::vector<cv::Point2f> shared_area(const Instance& a, const Instance& b) {
   return both;
 }
 
-/// Bounding box of points (edges on the extreme points; empty input: an empty box at 0).
-cv::Rect2f bounds(const std::vector<cv::Point2f>& points) {
-  if (points.empty())
-    return {};
-  float x0 = points[0].x, y0 = points[0].y, x1 = x0, y1 = y0;
-  for (const cv::Point2f& p : points) {
-    x0 = std::min(x0, p.x), y0 = std::min(y0, p.y);
-    x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
-  }
-  return {x0, y0, x1 - x0, y1 - y0};
-}
-
-/// Whether a point lies in a box (edges included).
-bool in_box(const cv::Rect2f& box, const cv::Point2f& p) {
-  return p.x >= box.x && p.x <= box.x + box.width && p.y >= box.y && p.y <= box.y + box.height;
-}
-
-/// How many of the points lie in the polygon (edges included). The polygon test is only run on
-/// the points in its bounding box: it costs far more than the box test, and most points of a
-/// model or an instance lie outside a small shared area.
-template <typename Points, typename Position>
-int count_inside(const Points& points, const std::vector<cv::Point2f>& polygon, Position position) {
-  const cv::Rect2f box = bounds(polygon);
-  int n = 0;
-  for (const auto& item : points) {
-    const cv::Point2f p = position(item);
-    n += in_box(box, p) && cv::pointPolygonTest(polygon, p, false) >= 0;
-  }
-  return n;
-}
-
-int count_inside(const std::vector<cv::Point2f>& points, const std::vector<cv::Point2f>& polygon) {
-  return count_inside(points, polygon, [](const cv::Point2f& p) { return p; });
-}
-
 /// Share of the model's keypoints lying in `region` (scene pixels) that the instance kept.
 double kept_share(const Instance& inst, const Features& model,
                   const std::vector<cv::Point2f>& region, int& kept) {
   kept = count_inside(inst.support, region);
   std::vector<cv::Point2f> in_model;
   cv::perspectiveTransform(region, in_model, cv::Mat(inst.homography.inv()));
-  const int expected =
-      count_inside(model.keypoints, in_model, [](const cv::KeyPoint& k) { return k.pt; });
+  const int expected = count_inside(model.keypoints, in_model);
   return expected > 0 ? static_cast<double>(kept) / expected : 0.0;
 }
 
@@ -111,12 +81,6 @@ double correlation(const Instance& inst, const Model& model, const cv::Mat& grey
     return -1.0;
   cv::Mat product = (frame - mf[0]).mul(model_pixels - mm[0]);
   return cv::mean(product, mask)[0] / (sf[0] * sm[0]);
-}
-
-/// Whether two boxes share a point (edges included).
-bool touch(const cv::Rect2f& a, const cv::Rect2f& b) {
-  return a.x <= b.x + b.width && b.x <= a.x + a.width && a.y <= b.y + b.height &&
-         b.y <= a.y + a.height;
 }
 
 } // namespace

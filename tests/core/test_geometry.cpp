@@ -2,6 +2,7 @@
 // The building blocks: votes, mean shift, similarity fits, RANSAC, occlusion.
 #include "../../src/look_alikes.hpp"
 #include "../../src/point_grid.hpp"
+#include "../../src/polygon.hpp"
 #include "../common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
@@ -481,4 +482,30 @@ TEST(PointGrid, BoxQueriesFindWhatAScanFinds) {
       EXPECT_TRUE(seen[i]) << i;
     }
   }
+}
+
+TEST(Polygon, CountsWhatThePolygonTestCounts) {
+  cv::RNG rng(9);
+  std::vector<cv::Point2f> points;
+  for (int i = 0; i < 400; ++i)
+    points.emplace_back(static_cast<float>(rng.uniform(0.0, 400.0)),
+                        static_cast<float>(rng.uniform(0.0, 300.0)));
+  // A concave polygon, and points on its corners and edges (they count as inside).
+  const std::vector<cv::Point2f> polygon = {
+      {50.f, 50.f}, {350.f, 60.f}, {200.f, 120.f}, {330.f, 250.f}, {60.f, 240.f}};
+  points.insert(points.end(), polygon.begin(), polygon.end());
+  points.emplace_back(200.f, 55.f);
+  int scan = 0;
+  for (const cv::Point2f& p : points)
+    scan += cv::pointPolygonTest(polygon, p, false) >= 0;
+  EXPECT_EQ(detail::count_inside(points, polygon), scan);
+  EXPECT_GT(scan, 5 + static_cast<int>(polygon.size()));
+  EXPECT_LT(scan, static_cast<int>(points.size()) - 5);
+  std::vector<cv::KeyPoint> keypoints;
+  cv::KeyPoint::convert(points, keypoints);
+  EXPECT_EQ(detail::count_inside(keypoints, polygon), scan);
+  EXPECT_EQ(detail::count_inside(points, {}), 0);
+  EXPECT_EQ(detail::bounds(polygon), cv::Rect2f(50.f, 50.f, 300.f, 200.f));
+  EXPECT_TRUE(detail::touch({0.f, 0.f, 10.f, 10.f}, {10.f, 10.f, 5.f, 5.f}));
+  EXPECT_FALSE(detail::touch({0.f, 0.f, 10.f, 10.f}, {10.5f, 0.f, 5.f, 5.f}));
 }
