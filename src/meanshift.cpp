@@ -15,13 +15,15 @@ constexpr int kMaxIterations = 100;
 /// Convergence: a shift shorter than this share of the bandwidth ends the climb.
 constexpr double kStopShift = 1e-3;
 
-/// Mean of the points within `radius` of `at`; returns the count (0: mean not set).
-int window_mean(const detail::PointGrid& grid, cv::Point2d at, double radius, cv::Point2d& mean) {
-  const std::vector<cv::Point2f>& points = grid.points();
+/// Sums the points within `radius` of `at` into `mean`; returns the count (0: mean not set).
+/// `visit_near(at, f)` calls f(i) for every point that may lie within the radius.
+template <typename VisitNear>
+int window_mean(const std::vector<cv::Point2f>& points, VisitNear&& visit_near, cv::Point2d at,
+                double radius, cv::Point2d& mean) {
   const double r2 = radius * radius;
   double sx = 0, sy = 0;
   int n = 0;
-  grid.for_neighbours(at, [&](int i) {
+  visit_near(at, [&](int i) {
     const double dx = points[i].x - at.x, dy = points[i].y - at.y;
     if (dx * dx + dy * dy <= r2) {
       sx += points[i].x;
@@ -34,11 +36,13 @@ int window_mean(const detail::PointGrid& grid, cv::Point2d at, double radius, cv
   return n;
 }
 
-cv::Point2d climb(const detail::PointGrid& grid, cv::Point2d at, double bandwidth, int& support) {
+template <typename VisitNear>
+cv::Point2d climb(const std::vector<cv::Point2f>& points, VisitNear&& visit_near, cv::Point2d at,
+                  double bandwidth, int& support) {
   support = 0;
   for (int it = 0; it < kMaxIterations; ++it) {
     cv::Point2d mean;
-    const int n = window_mean(grid, at, bandwidth, mean);
+    const int n = window_mean(points, visit_near, at, bandwidth, mean);
     if (n == 0)
       break;
     support = n;
@@ -57,6 +61,7 @@ std::vector<Cluster> mean_shift_clusters(const std::vector<cv::Point2f>& points,
   if (points.empty() || !(bandwidth > 0.0))
     return clusters;
   const detail::PointGrid grid(points, bandwidth);
+  auto near = [&](cv::Point2d at, auto&& visit) { grid.for_neighbours(at, visit); };
 
   struct Peak {
     cv::Point2d at;
@@ -73,7 +78,7 @@ std::vector<Cluster> mean_shift_clusters(const std::vector<cv::Point2f>& points,
       if (!seeded.emplace(k, true).second)
         continue;
       int support = 0;
-      const cv::Point2d mode = climb(grid, cv::Point2d(p.x, p.y), bandwidth, support);
+      const cv::Point2d mode = climb(points, near, cv::Point2d(p.x, p.y), bandwidth, support);
       if (support > 0)
         peaks.push_back({mode, support});
     }
@@ -129,9 +134,13 @@ cv::Point2f mean_shift_mode(const std::vector<cv::Point2f>& points, cv::Point2f 
                             double bandwidth) {
   if (points.empty() || !(bandwidth > 0.0))
     return start;
-  const detail::PointGrid grid(points, bandwidth);
+  // One climb: scanning all the points costs less than bucketing them first.
+  auto all = [&](cv::Point2d, auto&& visit) {
+    for (size_t i = 0; i < points.size(); ++i)
+      visit(static_cast<int>(i));
+  };
   int support = 0;
-  const cv::Point2d mode = climb(grid, cv::Point2d(start.x, start.y), bandwidth, support);
+  const cv::Point2d mode = climb(points, all, cv::Point2d(start.x, start.y), bandwidth, support);
   return cv::Point2f(static_cast<float>(mode.x), static_cast<float>(mode.y));
 }
 
