@@ -220,6 +220,35 @@ TEST_F(Synth, CoveredMatchesTheOutlinesOnTop) {
   EXPECT_GE(checked, 15);
 }
 
+TEST_F(Synth, CoversCountAsCovering) {
+  // The same scenes with and without foreign objects on them (the covers draw from their own
+  // random stream): the covers add to `covered` and take from `visible`, never the other way.
+  auto make = [&](const std::string& out, const std::string& covers) {
+    return synth({"--scenes", "3", "--size", "400x300", "--instances", "3-4", "--scale", "0.5-0.6",
+                  "--kind", "conveyor", "--seed", "5", "--format", "png", "--covers", covers,
+                  "--out", path(out), picture("box.png")});
+  };
+  ASSERT_EQ(make("plain", "0"), 0) << stderr_;
+  ASSERT_EQ(make("covered", "3"), 0) << stderr_;
+  const Dataset plain = load_dataset(path("plain")), covered = load_dataset(path("covered"));
+  ASSERT_EQ(plain.scenes.size(), covered.scenes.size());
+  int more = 0;
+  for (size_t s = 0; s < plain.scenes.size(); ++s) {
+    ASSERT_EQ(plain.scenes[s].instances.size(), covered.scenes[s].instances.size());
+    for (size_t i = 0; i < plain.scenes[s].instances.size(); ++i) {
+      const TrueInstance& a = plain.scenes[s].instances[i];
+      const TrueInstance& b = covered.scenes[s].instances[i];
+      EXPECT_EQ(a.points[0].x, b.points[0].x);
+      EXPECT_GE(*b.covered, *a.covered);
+      EXPECT_LE(b.visible, a.visible);
+      more += *b.covered > *a.covered + 0.01;
+    }
+  }
+  EXPECT_GE(more, 3) << "three covers in each of three scenes must hide some instances";
+  EXPECT_NE(synth({"--covers", "-1", "--out", path("x"), picture("box.png")}), 0);
+  EXPECT_NE(stderr_.find("--covers"), std::string::npos) << stderr_;
+}
+
 TEST_F(Synth, SameSeedSameOutput) {
   const std::vector<std::string> common = {"--scenes", "2",       "--size",
                                            "320x240",  "--scale", "0.4-0.5",

@@ -10,7 +10,8 @@
 // homography, whose images of the model's principal points and outline are the annotations;
 // `covered`, `visible` and `in_frame` are pixel counts of the rendered layers (the instance's
 // warped alpha at >= 50%, over a canvas large enough to hold the parts outside the frame).
-// Distractor objects lie on the floor under every instance, so they never cover one.
+// Distractor objects lie on the floor under every instance, so they never cover one; --covers
+// lays foreign objects (no model's) over instances, and `covered` counts what they hide too.
 // The output depends only on the inputs and --seed (own random generator, no std::
 // distributions, whose results differ between standard libraries).
 #include <glib.h>
@@ -106,6 +107,7 @@ struct Settings {
   bool mixed = false;
   std::string kind = "mixed";
   int distractors = 3;
+  int covers = 0; ///< Foreign objects lying on instances, per scene.
 };
 
 std::string sanitize(const std::string& stem) {
@@ -272,10 +274,51 @@ void draw_distractors(cv::Mat& bg, int count, Random& rng) {
   }
 }
 
+/// A foreign object over a random instance: a striped box or a plain ellipse a fifth to a half
+/// of the instance's shorter side, centred on a random point of its picture. Drawn on the frame
+/// (`bg`, CV_32FC3) and marked as -2 (nobody's) in `owner` (the canvas, `margin` around the
+/// frame), so the instances' truth counts it as covering.
+void draw_cover(cv::Mat& bg, cv::Mat& owner, int margin, const std::vector<ModelPicture>& models,
+                const std::vector<Placed>& placed, Random& rng) {
+  const Placed& target =
+      placed[static_cast<size_t>(rng.integer(0, static_cast<int>(placed.size()) - 1))];
+  const ModelPicture& m = models[static_cast<size_t>(target.model)];
+  const cv::Point2d on =
+      apply(target.homography, {{rng.uniform(0, m.bgr.cols), rng.uniform(0, m.bgr.rows)}})[0];
+  const double side = std::min(m.bgr.cols, m.bgr.rows) * target.scale;
+  const cv::Size2f size(static_cast<float>(rng.uniform(0.2, 0.5) * side),
+                        static_cast<float>(rng.uniform(0.2, 0.5) * side));
+  const float angle = static_cast<float>(rng.uniform(0, 180));
+  const cv::Scalar colour(rng.uniform(20, 230), rng.uniform(20, 230), rng.uniform(20, 230));
+  const bool box = rng.chance(0.6);
+  auto draw = [&](cv::Mat& image, cv::Point2d offset, const cv::Scalar& fill, bool stripes) {
+    const cv::RotatedRect r(
+        cv::Point2f(static_cast<float>(on.x + offset.x), static_cast<float>(on.y + offset.y)), size,
+        angle);
+    if (!box) {
+      cv::ellipse(image, r, fill, cv::FILLED, cv::LINE_8);
+      return;
+    }
+    cv::Point2f v[4];
+    r.points(v);
+    std::vector<cv::Point> poly;
+    for (const cv::Point2f& p : v)
+      poly.emplace_back(cvRound(p.x), cvRound(p.y));
+    cv::fillConvexPoly(image, poly, fill, cv::LINE_8);
+    if (stripes) // print-like texture, so that the cover has features of its own
+      for (int k = 1; k < 6; ++k)
+        cv::line(image, poly[0] + (poly[1] - poly[0]) * k / 6,
+                 poly[3] + (poly[2] - poly[3]) * k / 6, fill * 0.5, 2, cv::LINE_8);
+  };
+  draw(bg, {0, 0}, colour, true);
+  draw(owner, cv::Point2d(margin, margin), cv::Scalar(-2), false);
+}
+
 /// Draws the instances in order (z = index) over `bg` (CV_32FC3, frame size) and measures the
 /// layers on a canvas with `margin` pixels around the frame.
 Rendered render(cv::Mat bg, const std::vector<ModelPicture>& models,
-                const std::vector<Placed>& placed, Random& rng, int margin) {
+                const std::vector<Placed>& placed, Random& rng, int margin, int covers,
+                Random& cover_rng) {
   const cv::Size frame = bg.size();
   const cv::Size canvas(frame.width + 2 * margin, frame.height + 2 * margin);
   const cv::Matx33d shift(1, 0, margin, 0, 1, margin, 0, 0, 1);
@@ -356,6 +399,8 @@ Rendered render(cv::Mat bg, const std::vector<ModelPicture>& models,
     region = region.mul(cv::Scalar::all(1.0) - a3) + warped.mul(a3);
     region.copyTo(bg(rf));
   }
+  for (int k = 0; k < covers && !placed.empty(); ++k)
+    draw_cover(bg, owner, margin, models, placed, cover_rng);
   for (size_t i = 0; i < placed.size(); ++i) {
     const Placed& p = placed[i];
     const ModelPicture& m = models[static_cast<size_t>(p.model)];
@@ -556,6 +601,7 @@ int run(int argc, char** argv) {
   gdouble family = 0.0;
   gint64 seed = 1;
   gint distractors = 3;
+  gint covers = 0;
   gboolean mixed = FALSE;
   gchar** pictures = nullptr;
   const GOptionEntry entries[] = {
@@ -569,6 +615,8 @@ int run(int argc, char** argv) {
        "Mix the models within a scene (default: one model per scene, in turn)", nullptr},
       {"distractors", 0, 0, G_OPTION_ARG_INT, &distractors,
        "Distractor objects on the floor per scene (3)", "N"},
+      {"covers", 0, 0, G_OPTION_ARG_INT, &covers,
+       "Foreign objects lying on instances per scene (0); they count in 'covered'", "N"},
       {"family", 0, 0, G_OPTION_ARG_DOUBLE, &family,
        "Look-alike products: the first picture's top SHARE of its height (0 < SHARE < 1) is "
        "their common design, each further picture fills the rest of one product",
@@ -633,6 +681,9 @@ int run(int argc, char** argv) {
   if (scenes < 1 || scenes > 100000)
     throw Failure("--scenes must be at least 1");
   s.distractors = std::max(0, distractors);
+  if (covers < 0 || covers > 200)
+    throw Failure("--covers must lie between 0 and 200");
+  s.covers = covers;
   const std::string ext = format ? format : "jpg";
   if (ext != "jpg" && ext != "png")
     throw Failure("--format must be jpg or png");
@@ -654,6 +705,9 @@ int run(int argc, char** argv) {
   }
   const int margin = margin_for(models, s);
   Random rng(static_cast<uint64_t>(seed));
+  // The covers draw from their own stream: the same seed gives the same scenes with or
+  // without objects lying on them.
+  Random cover_rng(static_cast<uint64_t>(seed) ^ 0x9e3779b97f4a7c15ULL);
   cv::theRNG().state = static_cast<uint64_t>(seed) * 2654435761u + 1;
 
   std::vector<Rendered> frames;
@@ -709,7 +763,7 @@ int run(int argc, char** argv) {
                                  it.axis, {x, it.y});
         placed.push_back(p);
       }
-      Rendered r = render(belt.clone(), models, placed, rng, margin);
+      Rendered r = render(belt.clone(), models, placed, rng, margin, s.covers, cover_rng);
       // Instances wholly off the frame are not part of this frame's ground truth.
       r.truth.erase(std::remove_if(r.truth.begin(), r.truth.end(),
                                    [](const Rendered::Truth& t) { return t.in_frame <= 0.0; }),
@@ -741,7 +795,7 @@ int run(int argc, char** argv) {
       draw_distractors(floor, s.distractors, rng);
       floor.convertTo(bg, CV_32FC3);
       const std::vector<Placed> placed = place(k, models, allowed, s, rng);
-      frames.push_back(render(bg, models, placed, rng, margin));
+      frames.push_back(render(bg, models, placed, rng, margin, s.covers, cover_rng));
       kinds.push_back(k);
       progress("scene", i + 1, scenes);
     }
