@@ -3,6 +3,7 @@
 // can be picked and in what order.
 #include <pickdetect/occlusion.hpp>
 
+#include "foreign_cover.hpp"
 #include "polygon.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -192,6 +193,13 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
   for (size_t i = 0; i < n; ++i) {
     Instance& inst = instances[i];
     inst.covered = area[i] <= 0.0 || hidden[i] > kCoverTolerance * area[i];
+    if (!inst.covered && !grey.empty()) {
+      std::vector<const Instance*> on_it;
+      for (size_t j : above[i])
+        on_it.push_back(&instances[j]);
+      inst.covered = detail::foreign_cover_cells(inst, models[inst.model], grey, on_it) >=
+                     detail::kMinForeignCells;
+    }
     inst.visibility = 0.0;
     const cv::Rect box = cv::boundingRect(inst.outline) & frame;
     if (area[i] > 0.0 && box.area() > 0) {

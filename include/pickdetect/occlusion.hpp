@@ -42,7 +42,9 @@ void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<M
                            FeatureKind kind = FeatureKind::Sift);
 
 /// For every instance: `covered` (instances on it hide more than kCoverTolerance of its
-/// outline, counting those of which it cannot be told which one is on top),
+/// outline, counting those of which it cannot be told which one is on top; or, when `grey` is
+/// given, the frame shows something else than the model's picture over a connected patch of
+/// it: an object that is no instance lying on it),
 /// `visibility` (share of its outline inside the frame and under no instance on top of it),
 /// `pickable` (not covered, grasp point in the frame, visibility at least
 /// kMinPickableVisibility) and `pick_order` (1 = first, by score, among the pickable).

@@ -132,3 +132,56 @@ TEST(Occlusion, ASmallBoxLyingInsideABigOneIsKept) {
   EXPECT_TRUE(found[0].covered);
   EXPECT_TRUE(found[1].pickable);
 }
+
+namespace {
+
+/// One box at `pose`, then `draw` over the frame; the instance found nearest the pose.
+template <typename Draw> Instance detect_one(const Pose& pose, Draw&& draw) {
+  const cv::Mat picture = cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
+  cv::Mat scene = test_scene::plain_background({800, 600});
+  test_scene::paste(scene, picture, {pose});
+  draw(scene);
+  const Detection d = box_detector().detect(scene);
+  EXPECT_EQ(d.instances.size(), 1u);
+  return d.instances.empty() ? Instance() : d.instances[0];
+}
+
+/// A striped card (a package of another kind) `side` pixels wide, centred at `at`.
+void striped_card(cv::Mat& scene, cv::Point at, int side) {
+  const cv::Rect card(at.x - side / 2, at.y - side / 2, side, side);
+  scene(card).setTo(cv::Scalar(200));
+  for (int x = card.x + 4; x < card.x + card.width; x += 9)
+    cv::line(scene, {x, card.y}, {x + side / 3, card.y + card.height - 1}, cv::Scalar(60), 2);
+}
+
+} // namespace
+
+TEST(Occlusion, AnObjectOfNoModelLyingOnABoxCoversIt) {
+  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
+  const Instance free = detect_one(pose, [](cv::Mat&) {});
+  EXPECT_FALSE(free.covered);
+  EXPECT_TRUE(free.pickable);
+  // A card over one end of the box: a fifth of its width, far from its grasp point (the
+  // centre), most of the box's features still seen.
+  const Instance under = detect_one(pose, [](cv::Mat& s) { striped_card(s, {510, 330}, 60); });
+  EXPECT_GE(under.matches, 20);
+  EXPECT_TRUE(under.covered) << "a card lies on the box";
+  EXPECT_FALSE(under.pickable);
+  EXPECT_EQ(under.pick_order, 0);
+}
+
+TEST(Occlusion, GlareAndSpeckleOnABoxDoNotCoverIt) {
+  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
+  // A washed-out highlight (flat, brightest there) and sensor noise over the whole frame.
+  const Instance glare = detect_one(pose, [](cv::Mat& s) {
+    cv::Mat spot = cv::Mat::zeros(s.size(), CV_8UC1);
+    cv::circle(spot, {430, 290}, 35, cv::Scalar(255), cv::FILLED);
+    cv::GaussianBlur(spot, spot, cv::Size(0, 0), 6.0);
+    cv::add(s, spot, s);
+    cv::Mat noise(s.size(), CV_8UC1);
+    cv::randn(noise, 0, 4);
+    cv::add(s, noise, s);
+  });
+  EXPECT_FALSE(glare.covered);
+  EXPECT_TRUE(glare.pickable);
+}

@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+#include "foreign_cover.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace pickdetect::detail {
+namespace {
+
+/// Both pictures are compared through a band-pass (the difference of two blurs, each a box
+/// filter run twice, side in pixels: Gaussian-like with sigma 2 and 5.3 at the cost of a few
+/// additions per pixel): the light blur evens out the frame's optics, motion blur, noise and
+/// JPEG blocks against the model picture's finest print; the wide one removes what light does
+/// (shading, the soft rim of a highlight), which would otherwise lower the correlation of a
+/// plainly seen print.
+constexpr int kFineBox = 5;
+constexpr int kLightBox = 13;
+/// Frame grey levels at least this are taken as clipped.
+constexpr int kClipped = 250;
+/// Share of a cell that must be compared pixels for the cell to count.
+constexpr double kMinCellFill = 0.75;
+
+struct CellSums {
+  double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0;
+};
+
+std::vector<cv::Point> shifted(const std::vector<cv::Point2f>& outline, cv::Point2f by) {
+  std::vector<cv::Point> out;
+  out.reserve(outline.size());
+  for (const cv::Point2f& p : outline)
+    out.emplace_back(cvRound(p.x - by.x), cvRound(p.y - by.y));
+  return out;
+}
+
+cv::Mat twice_boxed(const cv::Mat& picture, int side) {
+  cv::Mat once, out;
+  cv::blur(picture, once, cv::Size(side, side), cv::Point(-1, -1), cv::BORDER_REFLECT);
+  cv::blur(once, out, cv::Size(side, side), cv::Point(-1, -1), cv::BORDER_REFLECT);
+  return out;
+}
+
+cv::Mat detail_of(const cv::Mat& grey) {
+  cv::Mat picture;
+  grey.convertTo(picture, CV_32F);
+  return twice_boxed(picture, kFineBox) - twice_boxed(picture, kLightBox);
+}
+
+} // namespace
+
+int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
+                        const std::vector<const Instance*>& above) {
+  if (grey.empty() || model.image.empty() || inst.outline.size() < 3)
+    return 0;
+  const cv::Rect box = cv::boundingRect(inst.outline) & cv::Rect(0, 0, grey.cols, grey.rows);
+  const int columns = box.width / kCoverCell, rows = box.height / kCoverCell;
+  if (columns <= 0 || rows <= 0)
+    return 0;
+  const cv::Matx33d to_box = cv::Matx33d(1, 0, -box.x, 0, 1, -box.y, 0, 0, 1) * inst.homography;
+  cv::Mat picture, mask;
+  // Replicated past the picture's edge, so that the band-pass sees no false edge there.
+  cv::warpPerspective(model.image, picture, cv::Mat(to_box), box.size(), cv::INTER_LINEAR,
+                      cv::BORDER_REPLICATE);
+  cv::warpPerspective(model.mask, mask, cv::Mat(to_box), box.size(), cv::INTER_NEAREST,
+                      cv::BORDER_CONSTANT);
+  const cv::Point2f origin(static_cast<float>(box.x), static_cast<float>(box.y));
+  for (const Instance* other : above)
+    if (other->outline.size() >= 3)
+      cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{shifted(other->outline, origin)},
+                   cv::Scalar(0));
+  // Clipped frame pixels (glare) show nothing of what lies there.
+  mask.setTo(0, grey(box) >= kClipped);
+  const cv::Mat frame = detail_of(grey(box)), carried = detail_of(picture);
+
+  std::vector<CellSums> cells(static_cast<size_t>(columns) * rows);
+  for (int y = 0; y < rows * kCoverCell; ++y) {
+    const uchar* in = mask.ptr<uchar>(y);
+    const float* f = frame.ptr<float>(y);
+    const float* m = carried.ptr<float>(y);
+    CellSums* row = &cells[static_cast<size_t>(y / kCoverCell) * columns];
+    for (int x = 0; x < columns * kCoverCell; ++x) {
+      if (!in[x])
+        continue;
+      CellSums& c = row[x / kCoverCell];
+      c.n += 1;
+      c.f += f[x];
+      c.m += m[x];
+      c.ff += static_cast<double>(f[x]) * f[x];
+      c.mm += static_cast<double>(m[x]) * m[x];
+      c.fm += static_cast<double>(f[x]) * m[x];
+    }
+  }
+  cv::Mat foreign = cv::Mat::zeros(rows, columns, CV_8UC1);
+  const double min_fill = kMinCellFill * kCoverCell * kCoverCell;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < columns; ++c) {
+      const CellSums& s = cells[static_cast<size_t>(r) * columns + c];
+      if (s.n < min_fill)
+        continue;
+      const double mf = s.f / s.n, mm = s.m / s.n;
+      const double vf = s.ff / s.n - mf * mf, vm = s.mm / s.n - mm * mm;
+      if (!(vm >= kMinCellTexture * kMinCellTexture) ||
+          !(vf >= kMinFrameTexture * kMinFrameTexture))
+        continue;
+      const double correlation = (s.fm / s.n - mf * mm) / std::sqrt(vf * vm);
+      if (correlation < kMaxForeignCorrelation)
+        foreign.at<uchar>(r, c) = 255;
+    }
+  cv::Mat labels, stats, centroids;
+  const int groups = cv::connectedComponentsWithStats(foreign, labels, stats, centroids, 4);
+  int largest = 0;
+  for (int g = 1; g < groups; ++g)
+    largest = std::max(largest, stats.at<int>(g, cv::CC_STAT_AREA));
+  return largest;
+}
+
+} // namespace pickdetect::detail
