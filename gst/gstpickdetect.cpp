@@ -9,8 +9,8 @@
  * every match votes for where its object's principal points (centre, grasping / delimiting
  * points) lie, and mean shift gathers the votes into instances. Each instance comes with its
  * model's name, centre, angle, scale, principal points, outline, score, visibility, whether
- * another instance lies on it (covered), whether it can be picked and in which order, and its
- * grasp point. Which of two overlapping instances lies on top, and so which can be picked, is
+ * another instance or an object of no model lies on it (covered), whether it can be picked and
+ * in which order, and its grasp point. Which of two overlapping instances lies on top, and so which can be picked, is
  * decided by the detection core; the element reports it as it is.
  *
  * The frame is worked on in place and its pixels are left untouched unless #GstPickDetect:draw

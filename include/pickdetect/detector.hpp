@@ -63,10 +63,12 @@ struct Instance {
   std::vector<cv::Point2f> support;            ///< Scene positions of the supporting keypoints.
   /// Estimated share of the outline that is seen: inside the frame and under no other instance.
   double visibility = 1.0;
-  bool covered = false;  ///< Another detected instance lies on it (or which is on top is unclear).
-  bool pickable = false; ///< Not covered and enough of it seen (see occlusion.hpp).
-  int pick_order = 0;    ///< 1 = pick first among the pickable instances; 0 = not pickable.
-  cv::Point2f grasp;     ///< The model's grasp point in the scene.
+  /// Another detected instance lies on it (or which is on top is unclear), or, when the frame's
+  /// pixels were given, something of no model does (see occlusion.hpp).
+  bool covered = false;
+  bool pickable = false;    ///< Not covered and enough of it seen (see occlusion.hpp).
+  int pick_order = 0;       ///< 1 = pick first among the pickable instances; 0 = not pickable.
+  cv::Point2f grasp;        ///< The model's grasp point in the scene.
   double grasp_angle = 0.0; ///< Gripper angle in degrees (the instance's angle).
 };
 

@@ -54,7 +54,8 @@ typedef struct {
  * @visibility: estimated share of the outline that is seen (inside the frame and under no other
  *   instance), in [0, 1]
  * @covered: %TRUE when another detected instance lies on this one (or when which of two
- *   overlapping instances is on top could not be told)
+ *   overlapping instances is on top could not be told), or when the frame shows something
+ *   else than the object over a patch of it (an object of no model lying on it)
  * @pickable: %TRUE when a gripper may take it now: not covered, grasp point in the frame and
  *   enough of it seen
  * @pick_order: 1 = pick first among the pickable instances, 2 = next, ...; 0 = not pickable
