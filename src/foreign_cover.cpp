@@ -62,7 +62,10 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
   // Replicated past the picture's edge, so that the band-pass sees no false edge there.
   cv::warpPerspective(model.image, picture, cv::Mat(to_box), box.size(), cv::INTER_LINEAR,
                       cv::BORDER_REPLICATE);
-  cv::warpPerspective(model.mask, mask, cv::Mat(to_box), box.size(), cv::INTER_NEAREST,
+  // A model without a mask is all object.
+  const cv::Mat object =
+      model.mask.empty() ? cv::Mat(model.image.size(), CV_8UC1, cv::Scalar(255)) : model.mask;
+  cv::warpPerspective(object, mask, cv::Mat(to_box), box.size(), cv::INTER_NEAREST,
                       cv::BORDER_CONSTANT);
   const cv::Point2f origin(static_cast<float>(box.x), static_cast<float>(box.y));
   for (const Instance* other : above)

@@ -3,6 +3,8 @@
 // can be picked and in what order.
 #include <pickdetect/occlusion.hpp>
 
+#include <pickdetect/error.hpp>
+
 #include "foreign_cover.hpp"
 #include "polygon.hpp"
 
@@ -163,6 +165,8 @@ void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<M
 
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
                       const cv::Size& frame_size, const cv::Mat& grey, FeatureKind kind) {
+  if (!grey.empty() && (grey.type() != CV_8UC1 || grey.size() != frame_size))
+    throw Error("assess_occlusion: the frame must be an 8-bit grey picture of the frame size");
   const size_t n = instances.size();
   // above[i]: the instances lying on instance i; hidden[i]: the area they hide, in pixels.
   std::vector<std::vector<size_t>> above(n);

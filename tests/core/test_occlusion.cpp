@@ -185,3 +185,17 @@ TEST(Occlusion, GlareAndSpeckleOnABoxDoNotCoverIt) {
   EXPECT_FALSE(glare.covered);
   EXPECT_TRUE(glare.pickable);
 }
+
+TEST(Occlusion, AFrameThatIsNotGreyIsRefusedByName) {
+  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
+  std::vector<Instance> found = {detect_one(pose, [](cv::Mat&) {})};
+  const cv::Mat colour(600, 800, CV_8UC3, cv::Scalar(90, 90, 90));
+  try {
+    assess_occlusion(found, box_detector().models(), {800, 600}, colour);
+    FAIL() << "a colour frame was taken";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("8-bit grey"), std::string::npos) << e.what();
+  }
+  const cv::Mat small(300, 400, CV_8UC1, cv::Scalar(90));
+  EXPECT_THROW(assess_occlusion(found, box_detector().models(), {800, 600}, small), Error);
+}
