@@ -14,9 +14,10 @@ GST_PLUGIN_PATH=<builddir>/gst, or PICKDETECT_BUILD_DIR=<builddir>, or --build-d
 
 Output, one line per instance:
     frame=0 pts=0:00:00.000000000 roi=0 model=box center=(187.03,223.92) angle=8.41 scale=0.537
-    score=0.885 matches=78 visibility=1.00 covered=no pickable=yes pick-order=1
+    score=0.885 matches=78 visibility=1.00 covered=yes pickable=no pick-order=0
     grasp=(187.03,223.92) bbox=89,161+196x138
-(on one line) and "frame=N instances=0" for a frame without any.
+(on one line) and "frame=N instances=0" for a frame without any. (The box in box_in_scene.png
+is covered: another package lies on its edge.)
 """
 import argparse
 import os
