@@ -9,14 +9,19 @@
 namespace pickdetect::detail {
 namespace {
 
+/// The comparison runs on pictures shrunk by this factor (the band-pass below leaves nothing
+/// finer anyway): a quarter of the pixels to warp, blur and sum.
+constexpr int kShrink = 2;
 /// Both pictures are compared through a band-pass (the difference of two blurs, each a box
-/// filter run twice, side in pixels: Gaussian-like with sigma 2 and 5.3 at the cost of a few
-/// additions per pixel): the light blur evens out the frame's optics, motion blur, noise and
-/// JPEG blocks against the model picture's finest print; the wide one removes what light does
-/// (shading, the soft rim of a highlight), which would otherwise lower the correlation of a
-/// plainly seen print.
-constexpr int kFineBox = 5;
-constexpr int kLightBox = 13;
+/// filter run twice; sides in shrunk pixels: Gaussian-like with sigma about 1.4 and 5.7 frame
+/// pixels, at the cost of a few additions per pixel): the light blur evens out the frame's
+/// optics, motion blur, noise and JPEG blocks against the model picture's finest print; the
+/// wide one removes what light does (shading, the soft rim of a highlight), which would
+/// otherwise lower the correlation of a plainly seen print.
+constexpr int kFineBox = 2;
+constexpr int kLightBox = 7;
+/// Shrunk pixels along the object's edge left out of the comparison.
+constexpr int kEdgeMargin = 2;
 /// Frame grey levels at least this are taken as clipped.
 constexpr int kClipped = 250;
 /// Share of a cell that must be compared pixels for the cell to count.
@@ -26,11 +31,11 @@ struct CellSums {
   double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0;
 };
 
-std::vector<cv::Point> shifted(const std::vector<cv::Point2f>& outline, cv::Point2f by) {
+std::vector<cv::Point> mapped(const std::vector<cv::Point2f>& outline, const cv::Matx33d& map) {
   std::vector<cv::Point> out;
   out.reserve(outline.size());
   for (const cv::Point2f& p : outline)
-    out.emplace_back(cvRound(p.x - by.x), cvRound(p.y - by.y));
+    out.emplace_back(cvRound(map(0, 0) * p.x + map(0, 2)), cvRound(map(1, 1) * p.y + map(1, 2)));
   return out;
 }
 
@@ -53,39 +58,54 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
                         const std::vector<const Instance*>& above) {
   if (grey.empty() || model.image.empty() || inst.outline.size() < 3)
     return 0;
-  const cv::Rect box = cv::boundingRect(inst.outline) & cv::Rect(0, 0, grey.cols, grey.rows);
-  const int columns = box.width / kCoverCell, rows = box.height / kCoverCell;
+  const cv::Rect seen = cv::boundingRect(inst.outline) & cv::Rect(0, 0, grey.cols, grey.rows);
+  // Whole shrunk pixels and whole cells only.
+  const int cell = kCoverCell / kShrink;
+  const cv::Rect box(seen.x, seen.y, seen.width / kShrink * kShrink,
+                     seen.height / kShrink * kShrink);
+  const cv::Size size(box.width / kShrink, box.height / kShrink);
+  const int columns = size.width / cell, rows = size.height / cell;
   if (columns <= 0 || rows <= 0)
     return 0;
-  const cv::Matx33d to_box = cv::Matx33d(1, 0, -box.x, 0, 1, -box.y, 0, 0, 1) * inst.homography;
+  // Frame pixels to shrunk ones: pixel j of the shrunk picture averages frame pixels
+  // kShrink * j ... kShrink * j + kShrink - 1 (centres on whole numbers).
+  const double k = 1.0 / kShrink, half = 0.5 * (kShrink - 1) * k;
+  const cv::Matx33d to_small(k, 0, -k * box.x - half, 0, k, -k * box.y - half, 0, 0, 1);
+  const cv::Matx33d to_box = to_small * inst.homography;
   cv::Mat picture, mask;
   // Replicated past the picture's edge, so that the band-pass sees no false edge there.
-  cv::warpPerspective(model.image, picture, cv::Mat(to_box), box.size(), cv::INTER_LINEAR,
+  cv::warpPerspective(model.image, picture, cv::Mat(to_box), size, cv::INTER_LINEAR,
                       cv::BORDER_REPLICATE);
   // A model without a mask is all object.
   const cv::Mat object =
       model.mask.empty() ? cv::Mat(model.image.size(), CV_8UC1, cv::Scalar(255)) : model.mask;
-  cv::warpPerspective(object, mask, cv::Mat(to_box), box.size(), cv::INTER_NEAREST,
-                      cv::BORDER_CONSTANT);
-  const cv::Point2f origin(static_cast<float>(box.x), static_cast<float>(box.y));
+  cv::warpPerspective(object, mask, cv::Mat(to_box), size, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
   for (const Instance* other : above)
     if (other->outline.size() >= 3)
-      cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{shifted(other->outline, origin)},
+      cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{mapped(other->outline, to_small)},
                    cv::Scalar(0));
+  // Near the edges of what is seen of the object the blurs mix in what lies beside it (more
+  // so under motion blur): only the inside is compared.
+  cv::erode(
+      mask, mask,
+      cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * kEdgeMargin + 1, 2 * kEdgeMargin + 1)),
+      cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::Mat shrunk;
+  cv::resize(grey(box), shrunk, size, 0, 0, cv::INTER_AREA);
   // Clipped frame pixels (glare) show nothing of what lies there.
-  mask.setTo(0, grey(box) >= kClipped);
-  const cv::Mat frame = detail_of(grey(box)), carried = detail_of(picture);
+  mask.setTo(0, shrunk >= kClipped);
+  const cv::Mat frame = detail_of(shrunk), carried = detail_of(picture);
 
   std::vector<CellSums> cells(static_cast<size_t>(columns) * rows);
-  for (int y = 0; y < rows * kCoverCell; ++y) {
+  for (int y = 0; y < rows * cell; ++y) {
     const uchar* in = mask.ptr<uchar>(y);
     const float* f = frame.ptr<float>(y);
     const float* m = carried.ptr<float>(y);
-    CellSums* row = &cells[static_cast<size_t>(y / kCoverCell) * columns];
-    for (int x = 0; x < columns * kCoverCell; ++x) {
+    CellSums* row = &cells[static_cast<size_t>(y / cell) * columns];
+    for (int x = 0; x < columns * cell; ++x) {
       if (!in[x])
         continue;
-      CellSums& c = row[x / kCoverCell];
+      CellSums& c = row[x / cell];
       c.n += 1;
       c.f += f[x];
       c.m += m[x];
@@ -95,7 +115,7 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
     }
   }
   cv::Mat foreign = cv::Mat::zeros(rows, columns, CV_8UC1);
-  const double min_fill = kMinCellFill * kCoverCell * kCoverCell;
+  const double min_fill = kMinCellFill * cell * cell;
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < columns; ++c) {
       const CellSums& s = cells[static_cast<size_t>(r) * columns + c];
@@ -110,6 +130,7 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
       if (correlation < kMaxForeignCorrelation)
         foreign.at<uchar>(r, c) = 255;
     }
+
   cv::Mat labels, stats, centroids;
   const int groups = cv::connectedComponentsWithStats(foreign, labels, stats, centroids, 4);
   int largest = 0;
