@@ -15,8 +15,8 @@ namespace pickdetect::detail {
 /// Side of the square cells the instance is compared in, in frame pixels.
 constexpr int kCoverCell = 12;
 /// A cell is compared only where the model's picture has texture there (standard deviation
-/// of its grey levels at least this), and the frame too: a flat frame cell (a highlight that
-/// washed the print out, or a plain surface) tells nothing either way.
+/// of its band-passed grey levels at least this), and the frame too: a flat frame cell (a
+/// highlight that washed the print out, or a plain surface) tells nothing either way.
 constexpr double kMinCellTexture = 8.0;
 constexpr double kMinFrameTexture = 5.0;
 /// A textured frame cell correlating this little with the model's picture carried there shows
@@ -24,14 +24,15 @@ constexpr double kMinFrameTexture = 5.0;
 constexpr double kMaxForeignCorrelation = 0.3;
 
 /// An instance counts as covered when at least this many connected cells show something else
-/// (scattered cells of noise and glare measured at most 3 on the development sets' uncovered
-/// instances, 0 for most).
+/// (groups of noise, glare and blur on uncovered instances stayed smaller on the development
+/// sets and the README's synthetic ones).
 constexpr int kMinForeignCells = 4;
 
 /// The largest 4-connected group of cells where the frame shows something else than the
 /// instance: the model's picture, carried into the frame by the instance's homography, and the
-/// frame are compared cell by cell (normalised cross-correlation after a light blur). Cells
-/// outside the frame, outside the model's mask or under one of `above` (instances lying on
+/// frame are compared cell by cell (normalised cross-correlation at half size, through a
+/// band-pass that leaves out light and blur). Cells outside the frame, outside the model's
+/// mask, near the edge of what is seen of it, or under one of `above` (instances lying on
 /// this one) are not compared. Scattered single cells come from noise and glare; an object
 /// lying on the instance leaves a connected group. `grey`: the frame, CV_8UC1.
 int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
