@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #include "point_grid.hpp"
 
+#include "polygon.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -41,11 +43,9 @@ std::vector<int> PointGrid::inside(const cv::Rect2f& box) const {
   if (x0 > x1 || y0 > y1)
     return out;
   auto take = [&](const std::vector<int>& cell) {
-    for (int i : cell) {
-      const cv::Point2f& p = points_[i];
-      if (p.x >= box.x && p.y >= box.y && p.x <= box.x + box.width && p.y <= box.y + box.height)
+    for (int i : cell)
+      if (in_box(box, points_[i]))
         out.push_back(i);
-    }
   };
   // Few cells in the box: look them up; else walk the occupied ones.
   if (static_cast<double>(x1 - x0 + 1) * static_cast<double>(y1 - y0 + 1) <=

@@ -17,9 +17,6 @@ public:
   PointGrid() = default;
   PointGrid(std::vector<cv::Point2f> points, double cell);
 
-  const std::vector<cv::Point2f>& points() const { return points_; }
-  bool empty() const { return points_.empty(); }
-
   /// Calls visit(i) for every point in the 3x3 cells around `at`: all points within one cell
   /// width of it, and some farther.
   template <typename F> void for_neighbours(cv::Point2d at, F&& visit) const {

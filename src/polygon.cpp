@@ -8,10 +8,6 @@
 namespace pickdetect::detail {
 namespace {
 
-bool in_box(const cv::Rect2f& box, const cv::Point2f& p) {
-  return p.x >= box.x && p.x <= box.x + box.width && p.y >= box.y && p.y <= box.y + box.height;
-}
-
 template <typename Points, typename Position>
 int count_in(const Points& points, const std::vector<cv::Point2f>& polygon, Position position) {
   if (polygon.empty())
@@ -36,6 +32,10 @@ cv::Rect2f bounds(const std::vector<cv::Point2f>& points) {
     x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
   }
   return {x0, y0, x1 - x0, y1 - y0};
+}
+
+bool in_box(const cv::Rect2f& box, const cv::Point2f& p) {
+  return p.x >= box.x && p.x <= box.x + box.width && p.y >= box.y && p.y <= box.y + box.height;
 }
 
 bool touch(const cv::Rect2f& a, const cv::Rect2f& b) {

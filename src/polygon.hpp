@@ -11,6 +11,9 @@ namespace pickdetect::detail {
 /// Bounding box of points (edges on the extreme points; empty input: an empty box at 0).
 cv::Rect2f bounds(const std::vector<cv::Point2f>& points);
 
+/// Whether a point lies in a box (edges included).
+bool in_box(const cv::Rect2f& box, const cv::Point2f& p);
+
 /// Whether two boxes share a point (edges included).
 bool touch(const cv::Rect2f& a, const cv::Rect2f& b);
 
