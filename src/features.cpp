@@ -7,6 +7,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace pickdetect {
@@ -43,7 +44,43 @@ Features orb_features(const cv::Mat& grey, const cv::Mat& mask) {
   return f;
 }
 
+/// OpenCV's SIFT contrast threshold: weaker extrema of the difference of Gaussians are left out
+/// as noise. It is in grey levels of a picture that spans the whole range.
+constexpr double kSiftContrastThreshold = 0.04;
+
+/// Every fourth row and column is enough for the percentiles of a frame's grey.
+constexpr int kExposureStride = 4;
+/// A frame whose grey spans (1st to 99th percentile) less than this is taken as exposed darker
+/// or flatter than a well-lit one: every contrast in it, the objects' too, is that much weaker.
+constexpr double kWellLitSpan = 128.0;
+/// The threshold follows the span down to this share of OpenCV's, no lower: below, the extra
+/// extrema are the sensor's noise.
+constexpr double kLeastContrastShare = 0.25;
+
 } // namespace
+
+double exposure_contrast_share(const cv::Mat& grey) {
+  CV_Assert(grey.type() == CV_8UC1);
+  long hist[256] = {0};
+  long n = 0;
+  for (int y = 0; y < grey.rows; y += kExposureStride) {
+    const uchar* g = grey.ptr<uchar>(y);
+    for (int x = 0; x < grey.cols; x += kExposureStride)
+      ++hist[g[x]];
+    n += (grey.cols + kExposureStride - 1) / kExposureStride;
+  }
+  if (n == 0)
+    return 1.0;
+  auto percentile = [&](double q) {
+    long seen = 0;
+    for (int v = 0; v < 256; ++v)
+      if ((seen += hist[v]) >= q * n)
+        return v;
+    return 255;
+  };
+  const double span = percentile(0.99) - percentile(0.01);
+  return std::clamp(span / kWellLitSpan, kLeastContrastShare, 1.0);
+}
 
 const char* feature_name(FeatureKind kind) {
   return kind == FeatureKind::Orb ? "orb" : "sift";
@@ -56,7 +93,8 @@ FeatureKind parse_features(const std::string& name) {
   throw Error("unknown features '" + name + "' (expected sift or orb)");
 }
 
-Features extract_features(const cv::Mat& grey, const cv::Mat& mask, FeatureKind kind) {
+Features extract_features(const cv::Mat& grey, const cv::Mat& mask, FeatureKind kind,
+                          double contrast_share) {
   CV_Assert(grey.type() == CV_8UC1);
   Features f;
   if (grey.empty())
@@ -65,19 +103,21 @@ Features extract_features(const cv::Mat& grey, const cv::Mat& mask, FeatureKind 
     return orb_features(grey, mask);
   // One detector per call: cv::SIFT keeps no state between calls, and per-call objects keep
   // concurrent callers apart. Its keypoints come out sorted, so the order is deterministic.
-  cv::Ptr<cv::SIFT> sift = cv::SIFT::create();
+  const double share = contrast_share < 1.0 ? std::max(contrast_share, 0.0) : 1.0; // NaN: 1
+  cv::Ptr<cv::SIFT> sift = cv::SIFT::create(0, 3, kSiftContrastThreshold * share);
   sift->detectAndCompute(grey, mask, f.keypoints, f.descriptors);
   for (cv::KeyPoint& k : f.keypoints)
     k.pt -= cv::Point2f(kSiftPositionBias, kSiftPositionBias);
   return f;
 }
 
-Features extract_features_scaled(const cv::Mat& grey, double scale, FeatureKind kind) {
+Features extract_features_scaled(const cv::Mat& grey, double scale, FeatureKind kind,
+                                 double contrast_share) {
   if (!(scale > 0.0) || scale >= 1.0)
-    return extract_features(grey, cv::Mat(), kind);
+    return extract_features(grey, cv::Mat(), kind, contrast_share);
   cv::Mat small;
   cv::resize(grey, small, cv::Size(), scale, scale, cv::INTER_AREA);
-  Features f = extract_features(small, cv::Mat(), kind);
+  Features f = extract_features(small, cv::Mat(), kind, contrast_share);
   // cv::resize aligns pixel centres: small pixel x covers grey's (x + 0.5) / fx - 0.5.
   const double fx = static_cast<double>(small.cols) / grey.cols;
   const double fy = static_cast<double>(small.rows) / grey.rows;

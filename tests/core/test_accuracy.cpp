@@ -245,3 +245,32 @@ TEST(Accuracy, VotingNamesEachProductOfALookAlikeFamily) {
   RecordProperty("lookalike_precision", std::to_string(score.precision()));
   RecordProperty("lookalike_recall", std::to_string(score.recall()));
 }
+
+/// Heaps taken with a seventh of the light (every grey level times 0.15, plus the
+/// sensor's rounding): SIFT's fixed contrast threshold alone would lose most of the boxes'
+/// keypoints; the frame's exposure sets it, so the boxes are found as in full light.
+TEST(Accuracy, VotingFindsTheBoxesInADimFrame) {
+  const cv::Mat box = cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
+  std::vector<cv::Mat> distractors;
+  for (const char* name : {"graf1.png", "building.jpg", "fruits.jpg"})
+    distractors.push_back(cv::imread(kData + "/" + name, cv::IMREAD_GRAYSCALE));
+  const Detector detector({load_model(kData + "/box.png")});
+  cv::RNG rng(2468);
+  Score score;
+  for (int scene_index = 0; scene_index < 5; ++scene_index) {
+    std::vector<Truth> truth;
+    const cv::Mat lit = make_heap({box}, distractors, 4 + scene_index % 3, rng, truth);
+    cv::Mat dim;
+    lit.convertTo(dim, CV_8UC1, 0.2);
+    EXPECT_LT(exposure_contrast_share(dim), 0.5) << "scene " << scene_index;
+    std::vector<std::string> problems;
+    score_scene(detector.detect(dim), truth, 0.1 * box.cols, score, problems);
+    for (const std::string& p : problems)
+      ADD_FAILURE() << "scene " << scene_index << ": " << p;
+  }
+  ASSERT_GT(score.required, 15);
+  EXPECT_GE(score.precision(), 0.99) << score.tp << " true, " << score.fp << " false instances";
+  EXPECT_GE(score.recall(), 0.98) << score.found_required << " of " << score.required
+                                  << " required boxes found";
+  RecordProperty("dim_recall", std::to_string(score.recall()));
+}

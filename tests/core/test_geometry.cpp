@@ -280,6 +280,32 @@ TEST(Features, KeypointsSitWhereTheBlobIs) {
   EXPECT_NEAR(best->pt.y, 90.f, 0.1f);
 }
 
+TEST(Features, TheContrastThresholdFollowsTheFramesExposure) {
+  // A ramp over every grey level spans about 250 of them: well lit. Dimmed or flattened to 30 %
+  // of that span, 75 of them: 75 / 128 of the threshold. Uniform grey: the least share.
+  cv::Mat ramp(64, 256, CV_8UC1);
+  for (int x = 0; x < ramp.cols; ++x)
+    ramp.col(x).setTo(x);
+  cv::Mat dim, flat;
+  ramp.convertTo(dim, CV_8UC1, 0.3);
+  ramp.convertTo(flat, CV_8UC1, 0.3, 120.0);
+  EXPECT_DOUBLE_EQ(exposure_contrast_share(ramp), 1.0);
+  EXPECT_NEAR(exposure_contrast_share(dim), 75.0 / 128, 0.02);
+  EXPECT_NEAR(exposure_contrast_share(flat), exposure_contrast_share(dim), 0.01);
+  EXPECT_DOUBLE_EQ(exposure_contrast_share(cv::Mat(64, 64, CV_8UC1, cv::Scalar(90))), 0.25);
+  // The lower threshold keeps many more of a dim picture's keypoints.
+  const cv::Mat graf =
+      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/graf1.png", cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(graf.empty());
+  cv::Mat dim_graf;
+  graf.convertTo(dim_graf, CV_8UC1, 0.25);
+  const Features fixed = extract_features(dim_graf);
+  const Features followed =
+      extract_features(dim_graf, cv::Mat(), FeatureKind::Sift, exposure_contrast_share(dim_graf));
+  EXPECT_GT(followed.keypoints.size(), fixed.keypoints.size() * 3 / 2)
+      << followed.keypoints.size() << " against " << fixed.keypoints.size();
+}
+
 TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
   const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
   const cv::Mat box =
