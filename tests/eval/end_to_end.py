@@ -5,7 +5,8 @@ pickdetect element, and score.py rescoring its --detections-out agrees with its 
 
     end_to_end.py PICKDETECT_SYNTH PICKDETECT_EVAL SCORE_PY MODEL_PICTURE [SECOND_PICTURE]
 
-Also checks that a dataset with a broken field is refused with the file and field named. With
+Also checks that the element finds as much in frames with a fifth of the light or of the
+contrast (--frame-gain, --frame-contrast), and that a dataset with a broken field is refused with the file and field named. With
 a second picture, a two-product dataset runs with both models in one element (the default),
 with --per-model and with --models.
 """
@@ -112,6 +113,16 @@ def main():
         rescored = json.loads(run([sys.executable, score, data, det]).stdout)
         # One method: the lines carry no "method" key and score.py names the set "detections".
         agree(voting, rescored["methods"]["detections"])
+
+        # The same frames with a fifth of the light, then flattened to a fifth of their contrast:
+        # the element finds what it found in full light.
+        for light in (["--frame-gain", "0.2"], ["--frame-contrast", "0.2"]):
+            dim = json.loads(run([tool, "--method", "voting", "--json", data] + light).stdout)
+            dim = dim["methods"]["voting"]["overall"]
+            print("element with %s:" % " ".join(light), json.dumps(dim))
+            assert dim["tp"] >= overall["tp"] and dim["fp"] == 0, (light, dim)
+        err = run([tool, "--frame-gain", "0", data], expect=2).stderr
+        assert "--frame-gain wants 0 < G <= 4, got 0" in err, err
 
         # A broken dataset is refused, naming the file and the field.
         broken = os.path.join(tmp, "broken")

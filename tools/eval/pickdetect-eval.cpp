@@ -5,6 +5,7 @@
 //   pickdetect-eval --method voting --json --detections-out voting.jsonl DATASET_DIR
 //   pickdetect-eval --score detections.jsonl DATASET_DIR     (scores a file, runs nothing)
 //   pickdetect-eval --frame-scale 0.5 DATASET_DIR   (frames and truth shrunk: 1280x960 -> 640x480)
+//   pickdetect-eval --frame-gain 0.3 DATASET_DIR    (frames taken with 30 % of the light)
 //
 // Every scene goes through the real element (appsrc ! pickdetect ! appsink) once per method,
 // with all the dataset's models loaded at once as a user would (or, with --per-model, once per
@@ -100,6 +101,8 @@ struct Options {
   gboolean bgr = FALSE;
   gboolean per_model = FALSE;
   gdouble frame_scale = 1.0;
+  gdouble frame_gain = 1.0;
+  gdouble frame_contrast = 1.0;
   gchar* models = nullptr;
   gchar* ratio = nullptr;
   gchar* bandwidth = nullptr;
@@ -159,6 +162,16 @@ void scale_frames(Dataset& dataset, std::vector<Frame>* frames, double scale) {
   }
 }
 
+/// Changes the light of every frame: grey (or colour) levels v become
+/// (128 + (v - 128) * contrast) * gain, rounded and clipped to 0..255. Gain under 1 is a frame
+/// taken with less light, contrast under 1 a flatter (hazier) one; the truth stays as it is.
+void relight_frames(std::vector<Frame>& frames, double gain, double contrast) {
+  for (Frame& f : frames) {
+    cv::Mat levels(1, static_cast<int>(f.pixels.size()), CV_8UC1, f.pixels.data());
+    levels.convertTo(levels, CV_8UC1, contrast * gain, 128.0 * (1.0 - contrast) * gain);
+  }
+}
+
 int run(int argc, char** argv) {
   Options o;
   const GOptionEntry entries[] = {
@@ -173,6 +186,14 @@ int run(int argc, char** argv) {
        "Resize every frame by F (area interpolation) before pushing it, and the ground truth "
        "with it (0 < F <= 1; 0.5 makes 1280x960 scenes 640x480)",
        "F"},
+      {"frame-gain", 0, 0, G_OPTION_ARG_DOUBLE, &o.frame_gain,
+       "Multiply every frame's levels by G before pushing it, clipped (0 < G <= 4; 0.3 is a "
+       "frame taken with 30 % of the light)",
+       "G"},
+      {"frame-contrast", 0, 0, G_OPTION_ARG_DOUBLE, &o.frame_contrast,
+       "Pull every frame's levels towards mid-grey to C of their contrast, before any gain "
+       "(0 < C <= 1)",
+       "C"},
       {"per-model", 0, 0, G_OPTION_ARG_NONE, &o.per_model,
        "One element per model, each with that model alone (default: one element with all the "
        "models)",
@@ -219,6 +240,16 @@ int run(int argc, char** argv) {
 
   if (!(o.frame_scale > 0.0 && o.frame_scale <= 1.0)) {
     std::cerr << "pickdetect-eval: --frame-scale wants 0 < F <= 1, got " << o.frame_scale << "\n";
+    return 2;
+  }
+
+  if (!(o.frame_gain > 0.0 && o.frame_gain <= 4.0)) {
+    std::cerr << "pickdetect-eval: --frame-gain wants 0 < G <= 4, got " << o.frame_gain << "\n";
+    return 2;
+  }
+  if (!(o.frame_contrast > 0.0 && o.frame_contrast <= 1.0)) {
+    std::cerr << "pickdetect-eval: --frame-contrast wants 0 < C <= 1, got " << o.frame_contrast
+              << "\n";
     return 2;
   }
 
@@ -305,6 +336,8 @@ int run(int argc, char** argv) {
     std::vector<Frame> frames = load_frames(dataset, o.bgr);
     if (o.frame_scale != 1.0)
       scale_frames(dataset, &frames, o.frame_scale);
+    if (o.frame_gain != 1.0 || o.frame_contrast != 1.0)
+      relight_frames(frames, o.frame_gain, o.frame_contrast);
     gchar* tmp = g_dir_make_tmp("pickdetect-eval-XXXXXX", &error);
     if (!tmp) {
       std::cerr << "pickdetect-eval: " << error->message << "\n";
