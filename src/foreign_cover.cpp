@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <vector>
 
 namespace pickdetect::detail {
 namespace {
@@ -27,9 +29,25 @@ constexpr int kClipped = 250;
 /// Share of a cell that must be compared pixels for the cell to count.
 constexpr double kMinCellFill = 0.75;
 
+/// Per cell: compared pixels, sums of the band-passed frame f and model m (and their squares
+/// and product), and of the shrunk grey levels of both (lf, lm).
 struct CellSums {
-  double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0;
+  double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0, lf = 0, lm = 0;
 };
+
+/// One cell's figures: band-passed detail (standard deviations), correlation, grey levels.
+struct CellLook {
+  bool compared = false; ///< Enough pixels, and the model's picture has texture there.
+  double detail_f = 0, detail_m = 0, correlation = 0, level_f = 0, level_m = 0;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty())
+    return NAN;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
 
 std::vector<cv::Point> mapped(const std::vector<cv::Point2f>& outline, const cv::Matx33d& map) {
   std::vector<cv::Point> out;
@@ -101,6 +119,8 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
     const uchar* in = mask.ptr<uchar>(y);
     const float* f = frame.ptr<float>(y);
     const float* m = carried.ptr<float>(y);
+    const uchar* lf = shrunk.ptr<uchar>(y);
+    const uchar* lm = picture.ptr<uchar>(y); // model pictures are 8-bit grey
     CellSums* row = &cells[static_cast<size_t>(y / cell) * columns];
     for (int x = 0; x < columns * cell; ++x) {
       if (!in[x])
@@ -112,22 +132,58 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
       c.ff += static_cast<double>(f[x]) * f[x];
       c.mm += static_cast<double>(m[x]) * m[x];
       c.fm += static_cast<double>(f[x]) * m[x];
+      c.lf += lf[x];
+      c.lm += lm[x];
     }
   }
-  cv::Mat foreign = cv::Mat::zeros(rows, columns, CV_8UC1);
+  std::vector<CellLook> looks(cells.size());
+  std::vector<double> detail_ratios, level_ratios;
   const double min_fill = kMinCellFill * cell * cell;
+  for (size_t i = 0; i < cells.size(); ++i) {
+    const CellSums& s = cells[i];
+    if (s.n < min_fill)
+      continue;
+    CellLook& l = looks[i];
+    const double mf = s.f / s.n, mm = s.m / s.n;
+    const double vf = std::max(0.0, s.ff / s.n - mf * mf), vm = s.mm / s.n - mm * mm;
+    if (!(vm >= kMinCellTexture * kMinCellTexture))
+      continue;
+    l.compared = true;
+    l.detail_f = std::sqrt(vf);
+    l.detail_m = std::sqrt(vm);
+    l.level_f = s.lf / s.n;
+    l.level_m = s.lm / s.n;
+    if (l.detail_f < kMinFrameTexture)
+      continue;
+    l.correlation = (s.fm / s.n - mf * mm) / (l.detail_f * l.detail_m);
+    if (l.correlation >= kMaxForeignCorrelation) { // the print, as the model shows it
+      detail_ratios.push_back(l.detail_f / l.detail_m);
+      if (l.level_m > 0.0)
+        level_ratios.push_back(l.level_f / l.level_m);
+    }
+  }
+  // How much of the print's detail and light this frame shows where the print is seen (blur,
+  // exposure): the median over the cells that match.
+  const bool seen_enough = static_cast<int>(detail_ratios.size()) >= kMinForeignCells;
+  const double detail_kept = median(detail_ratios), light = median(level_ratios);
+
+  cv::Mat foreign = cv::Mat::zeros(rows, columns, CV_8UC1);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < columns; ++c) {
-      const CellSums& s = cells[static_cast<size_t>(r) * columns + c];
-      if (s.n < min_fill)
+      const CellLook& l = looks[static_cast<size_t>(r) * columns + c];
+      if (!l.compared)
         continue;
-      const double mf = s.f / s.n, mm = s.m / s.n;
-      const double vf = s.ff / s.n - mf * mf, vm = s.mm / s.n - mm * mm;
-      if (!(vm >= kMinCellTexture * kMinCellTexture) ||
-          !(vf >= kMinFrameTexture * kMinFrameTexture))
-        continue;
-      const double correlation = (s.fm / s.n - mf * mm) / std::sqrt(vf * vm);
-      if (correlation < kMaxForeignCorrelation)
+      bool other = false;
+      if (l.detail_f >= kMinFrameTexture)
+        other = l.correlation < kMaxForeignCorrelation;
+      else if (seen_enough)
+        // Flat where the print, as this frame shows it elsewhere, would have clear detail, and
+        // not brighter than the print there: a plain surface lies on it. Brighter is a
+        // highlight washing the print out (or a white surface: it cannot be told).
+        other = detail_kept * l.detail_m >= kFlatCoverDetail * kMinFrameTexture &&
+                l.detail_f <= kFlatCoverShare * detail_kept * l.detail_m &&
+                l.level_f <= light * (l.level_m + kGlareLevels);
+      if (other)
         foreign.at<uchar>(r, c) = 255;
     }
 

@@ -170,6 +170,25 @@ TEST(Occlusion, AnObjectOfNoModelLyingOnABoxCoversIt) {
   EXPECT_EQ(under.pick_order, 0);
 }
 
+TEST(Occlusion, APlainObjectLyingOnABoxCoversIt) {
+  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
+  // A plain grey lid, no texture of its own, over the box's printed lower end.
+  const Instance under = detect_one(pose, [](cv::Mat& s) {
+    cv::ellipse(s, {480, 340}, {32, 24}, 30.0, 0.0, 360.0, cv::Scalar(90), cv::FILLED);
+  });
+  EXPECT_GE(under.matches, 20);
+  EXPECT_TRUE(under.covered) << "a plain lid lies on the box";
+  EXPECT_FALSE(under.pickable);
+}
+
+TEST(Occlusion, MotionBlurOnABoxDoesNotCoverIt) {
+  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
+  // The conveyor moved 11 pixels while the shutter was open: the finest print is gone.
+  const Instance blurred = detect_one(pose, [](cv::Mat& s) { cv::blur(s, s, cv::Size(11, 1)); });
+  EXPECT_FALSE(blurred.covered);
+  EXPECT_TRUE(blurred.pickable);
+}
+
 TEST(Occlusion, GlareAndSpeckleOnABoxDoNotCoverIt) {
   const Pose pose{{400.f, 300.f}, 20.0, 1.0};
   // A washed-out highlight (flat, brightest there) and sensor noise over the whole frame.
@@ -184,6 +203,18 @@ TEST(Occlusion, GlareAndSpeckleOnABoxDoNotCoverIt) {
   });
   EXPECT_FALSE(glare.covered);
   EXPECT_TRUE(glare.pickable);
+  // A broad sheen that washes the print out to a flat light grey, short of clipping.
+  const Instance sheen = detect_one(pose, [](cv::Mat& s) {
+    cv::Mat alpha = cv::Mat::zeros(s.size(), CV_32FC1);
+    cv::circle(alpha, {470, 330}, 30, cv::Scalar(1.0), cv::FILLED);
+    cv::GaussianBlur(alpha, alpha, cv::Size(0, 0), 8.0);
+    cv::Mat grey;
+    s.convertTo(grey, CV_32F);
+    grey = grey.mul(1.0 - alpha) + 235.0 * alpha;
+    grey.convertTo(s, CV_8U);
+  });
+  EXPECT_FALSE(sheen.covered);
+  EXPECT_TRUE(sheen.pickable);
 }
 
 TEST(Occlusion, AFrameThatIsNotGreyIsRefusedByName) {
