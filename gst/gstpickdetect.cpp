@@ -10,8 +10,8 @@
  * points) lie, and mean shift gathers the votes into instances. Each instance comes with its
  * model's name, centre, angle, scale, principal points, outline, score, visibility, whether
  * another instance or an object of no model lies on it (covered), whether it can be picked and
- * in which order, and its grasp point. Which of two overlapping instances lies on top, and so which can be picked, is
- * decided by the detection core; the element reports it as it is.
+ * in which order, and its grasp point. Which of two overlapping instances lies on top, and so which
+ * can be picked, is decided by the detection core; the element reports it as it is.
  *
  * The frame is worked on in place and its pixels are left untouched unless #GstPickDetect:draw
  * is set. Detection reads the grey or luma plane of the frame where the format has one, and a
@@ -133,6 +133,7 @@ enum {
   PROP_ALLOW_SCALE,
   PROP_FEATURES,
   PROP_DETECTION_SCALE,
+  PROP_CONTRAST_THRESHOLD,
   PROP_REFINE,
   PROP_DRAW,
   PROP_POST_MESSAGES,
@@ -148,6 +149,7 @@ constexpr int DEFAULT_MAX_INSTANCES = 0;
 constexpr gboolean DEFAULT_ALLOW_SCALE = TRUE;
 constexpr GstPickDetectFeatures DEFAULT_FEATURES = GST_PICK_DETECT_FEATURES_SIFT;
 constexpr double DEFAULT_DETECTION_SCALE = 1.0;
+constexpr double DEFAULT_CONTRAST_THRESHOLD = 0.0;
 constexpr gboolean DEFAULT_REFINE = TRUE;
 constexpr gboolean DEFAULT_DRAW = FALSE;
 constexpr gboolean DEFAULT_POST_MESSAGES = TRUE;
@@ -163,6 +165,7 @@ static_assert(pickdetect::Settings{}.allow_scale == static_cast<bool>(DEFAULT_AL
 static_assert(pickdetect::Settings{}.features == pickdetect::FeatureKind::Sift &&
               DEFAULT_FEATURES == GST_PICK_DETECT_FEATURES_SIFT);
 static_assert(pickdetect::Settings{}.detection_scale == DEFAULT_DETECTION_SCALE);
+static_assert(pickdetect::Settings{}.contrast_threshold == DEFAULT_CONTRAST_THRESHOLD);
 static_assert(pickdetect::Settings{}.refine == static_cast<bool>(DEFAULT_REFINE));
 
 namespace {
@@ -492,6 +495,9 @@ static void gst_pick_detect_set_property(GObject* object, guint prop_id, const G
   case PROP_DETECTION_SCALE:
     config.settings.detection_scale = g_value_get_double(value);
     break;
+  case PROP_CONTRAST_THRESHOLD:
+    config.settings.contrast_threshold = g_value_get_double(value);
+    break;
   case PROP_REFINE:
     config.settings.refine = g_value_get_boolean(value);
     break;
@@ -547,6 +553,9 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
     break;
   case PROP_DETECTION_SCALE:
     g_value_set_double(value, config.settings.detection_scale);
+    break;
+  case PROP_CONTRAST_THRESHOLD:
+    g_value_set_double(value, config.settings.contrast_threshold);
     break;
   case PROP_REFINE:
     g_value_set_boolean(value, config.settings.refine);
@@ -974,6 +983,15 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
                           "interpolation); positions stay in frame pixels. 0.5 costs SIFT about a "
                           "quarter of its time, and the smallest details",
                           0.1, 1.0, DEFAULT_DETECTION_SCALE, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_CONTRAST_THRESHOLD,
+      g_param_spec_double("contrast-threshold", "Contrast threshold",
+                          "SIFT's contrast threshold for the frames, on OpenCV's scale (0.04 is "
+                          "its default; lower keeps weaker keypoints, at more cost). 0: automatic, "
+                          "0.04 lowered in proportion for a dim or flat frame (grey span from the "
+                          "1st to the 99th percentile under 128 levels), to 0.01 at the least. "
+                          "Set it (e.g. 0.02) where the light changes across the frame",
+                          0.0, 0.2, DEFAULT_CONTRAST_THRESHOLD, flags));
   g_object_class_install_property(
       gobject_class, PROP_REFINE,
       g_param_spec_boolean("refine", "Refine",

@@ -90,9 +90,13 @@ Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const 
   if (grey.cols < kMinFrameSide || grey.rows < kMinFrameSide)
     return result;
   const auto t0 = Clock::now();
-  // The contrast threshold follows the frame's exposure: a dim frame keeps its weaker extrema.
-  const Features scene = extract_features_scaled(grey, settings.detection_scale, settings.features,
-                                                 exposure_contrast_share(grey));
+  // By default the contrast threshold follows the frame's exposure: a dim frame keeps its
+  // weaker extrema.
+  const double contrast = settings.contrast_threshold > 0.0
+                              ? settings.contrast_threshold
+                              : kSiftContrastThreshold * exposure_contrast_share(grey);
+  const Features scene =
+      extract_features_scaled(grey, settings.detection_scale, settings.features, contrast);
   const double features_ms = ms_since(t0);
   result = detect_scene(scene, grey.size(), settings, grey);
   result.timings.features_ms = features_ms;

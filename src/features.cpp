@@ -44,10 +44,6 @@ Features orb_features(const cv::Mat& grey, const cv::Mat& mask) {
   return f;
 }
 
-/// OpenCV's SIFT contrast threshold: weaker extrema of the difference of Gaussians are left out
-/// as noise. It is in grey levels of a picture that spans the whole range.
-constexpr double kSiftContrastThreshold = 0.04;
-
 /// Every fourth row and column is enough for the percentiles of a frame's grey.
 constexpr int kExposureStride = 4;
 /// A frame whose grey spans (1st to 99th percentile) less than this is taken as exposed darker
@@ -94,7 +90,7 @@ FeatureKind parse_features(const std::string& name) {
 }
 
 Features extract_features(const cv::Mat& grey, const cv::Mat& mask, FeatureKind kind,
-                          double contrast_share) {
+                          double contrast_threshold) {
   CV_Assert(grey.type() == CV_8UC1);
   Features f;
   if (grey.empty())
@@ -103,8 +99,8 @@ Features extract_features(const cv::Mat& grey, const cv::Mat& mask, FeatureKind 
     return orb_features(grey, mask);
   // One detector per call: cv::SIFT keeps no state between calls, and per-call objects keep
   // concurrent callers apart. Its keypoints come out sorted, so the order is deterministic.
-  const double share = contrast_share < 1.0 ? std::max(contrast_share, 0.0) : 1.0; // NaN: 1
-  cv::Ptr<cv::SIFT> sift = cv::SIFT::create(0, 3, kSiftContrastThreshold * share);
+  const double threshold = contrast_threshold >= 0.0 ? contrast_threshold : kSiftContrastThreshold;
+  cv::Ptr<cv::SIFT> sift = cv::SIFT::create(0, 3, threshold);
   sift->detectAndCompute(grey, mask, f.keypoints, f.descriptors);
   for (cv::KeyPoint& k : f.keypoints)
     k.pt -= cv::Point2f(kSiftPositionBias, kSiftPositionBias);
@@ -112,12 +108,12 @@ Features extract_features(const cv::Mat& grey, const cv::Mat& mask, FeatureKind 
 }
 
 Features extract_features_scaled(const cv::Mat& grey, double scale, FeatureKind kind,
-                                 double contrast_share) {
+                                 double contrast_threshold) {
   if (!(scale > 0.0) || scale >= 1.0)
-    return extract_features(grey, cv::Mat(), kind, contrast_share);
+    return extract_features(grey, cv::Mat(), kind, contrast_threshold);
   cv::Mat small;
   cv::resize(grey, small, cv::Size(), scale, scale, cv::INTER_AREA);
-  Features f = extract_features(small, cv::Mat(), kind, contrast_share);
+  Features f = extract_features(small, cv::Mat(), kind, contrast_threshold);
   // cv::resize aligns pixel centres: small pixel x covers grey's (x + 0.5) / fx - 0.5.
   const double fx = static_cast<double>(small.cols) / grey.cols;
   const double fy = static_cast<double>(small.rows) / grey.rows;

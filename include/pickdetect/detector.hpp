@@ -41,6 +41,11 @@ struct Settings {
   /// Features are extracted from the frame shrunk by this factor (0 < f <= 1), then carried back
   /// to frame pixels: 0.5 costs SIFT about a quarter of its time, and the smallest details.
   double detection_scale = 1.0;
+  /// SIFT's contrast threshold for the frames (OpenCV's scale: kSiftContrastThreshold, 0.04, is
+  /// its default); 0 = automatic: 0.04 times exposure_contrast_share(frame), lower for dim or
+  /// flat frames. Set it (e.g. 0.02) where the light changes across the frame (a spot light):
+  /// more keypoints in the darker parts, at more cost everywhere.
+  double contrast_threshold = 0.0;
   double ransac_reprojection_px = 5.0; ///< RANSAC baselines: inlier distance in scene pixels.
 };
 

@@ -24,19 +24,26 @@ struct Features {
   cv::Mat descriptors;
 };
 
+/// OpenCV's SIFT contrast threshold: extrema of the difference of Gaussians weaker than this
+/// (in grey levels / 255, over the 3 layers of an octave) are left out as noise.
+constexpr double kSiftContrastThreshold = 0.04;
+
 /// Features of a grey picture (CV_8UC1, any stride); an optional mask limits where keypoints
 /// lie. Positions are in the picture's pixels with pixel centres on integers.
-/// `contrast_share` (0 to 1) scales SIFT's contrast threshold (OpenCV's default, 0.04, at 1):
-/// below 1, weaker extrema are kept too (see exposure_contrast_share). ORB ignores it.
+/// `contrast_threshold`: SIFT's (lower keeps weaker extrema too; see exposure_contrast_share);
+/// ORB ignores it.
 Features extract_features(const cv::Mat& grey, const cv::Mat& mask = cv::Mat(),
-                          FeatureKind kind = FeatureKind::Sift, double contrast_share = 1.0);
+                          FeatureKind kind = FeatureKind::Sift,
+                          double contrast_threshold = kSiftContrastThreshold);
 
 /// Features of `grey` shrunk by `scale` (0 < scale <= 1, area interpolation), with positions and
 /// sizes carried back to `grey`'s pixels.
 Features extract_features_scaled(const cv::Mat& grey, double scale,
-                                 FeatureKind kind = FeatureKind::Sift, double contrast_share = 1.0);
+                                 FeatureKind kind = FeatureKind::Sift,
+                                 double contrast_threshold = kSiftContrastThreshold);
 
-/// How much of SIFT's contrast threshold suits a frame of this exposure (CV_8UC1): 1 for a
+/// How much of SIFT's contrast threshold (kSiftContrastThreshold) suits a frame of this
+/// exposure (CV_8UC1; the detector's default, Settings::contrast_threshold 0): 1 for a
 /// frame whose grey spans (1st to 99th percentile) 128 levels or more, that span / 128 for a
 /// dimmer or flatter one, 0.25 at the least. In a frame taken with a quarter of the light
 /// every contrast is a quarter as strong, the objects' too: with OpenCV's fixed threshold SIFT

@@ -301,7 +301,8 @@ TEST(Features, TheContrastThresholdFollowsTheFramesExposure) {
   graf.convertTo(dim_graf, CV_8UC1, 0.25);
   const Features fixed = extract_features(dim_graf);
   const Features followed =
-      extract_features(dim_graf, cv::Mat(), FeatureKind::Sift, exposure_contrast_share(dim_graf));
+      extract_features(dim_graf, cv::Mat(), FeatureKind::Sift,
+                       kSiftContrastThreshold * exposure_contrast_share(dim_graf));
   EXPECT_GT(followed.keypoints.size(), fixed.keypoints.size() * 3 / 2)
       << followed.keypoints.size() << " against " << fixed.keypoints.size();
 }

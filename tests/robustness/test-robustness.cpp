@@ -463,7 +463,8 @@ GST_START_TEST(test_property_ranges) {
   GstElement* pd = gst_element_factory_make("pickdetect", nullptr);
   fail_unless(pd != nullptr);
   gst_object_ref_sink(pd);
-  g_object_set(pd, "ratio", 0.7, "bandwidth", 12.0, "min-matches", 9, "max-instances", 3, nullptr);
+  g_object_set(pd, "ratio", 0.7, "bandwidth", 12.0, "min-matches", 9, "max-instances", 3,
+               "contrast-threshold", 0.03, nullptr);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
 
@@ -471,6 +472,8 @@ GST_START_TEST(test_property_ranges) {
     ASSERT_WARNING(g_object_set(pd, "ratio", bad, nullptr));
   for (const double bad : {nan, inf, -inf, -1.0, -0.001})
     ASSERT_WARNING(g_object_set(pd, "bandwidth", bad, nullptr));
+  for (const double bad : {nan, inf, -inf, -0.01, 0.21})
+    ASSERT_WARNING(g_object_set(pd, "contrast-threshold", bad, nullptr));
   for (const int bad : {0, -1, G_MININT})
     ASSERT_WARNING(g_object_set(pd, "min-matches", bad, nullptr));
   for (const int bad : {-1, G_MININT})
@@ -482,10 +485,12 @@ GST_START_TEST(test_property_ranges) {
   for (const char* bad : {"nan", "inf", "-5"})
     ASSERT_WARNING(gst_util_set_object_arg(G_OBJECT(pd), "bandwidth", bad));
 
-  double ratio = 0, bandwidth = 0;
+  double ratio = 0, bandwidth = 0, contrast = 0;
   int min_matches = 0, max_instances = 0, method = -1;
   g_object_get(pd, "ratio", &ratio, "bandwidth", &bandwidth, "min-matches", &min_matches,
-               "max-instances", &max_instances, "method", &method, nullptr);
+               "max-instances", &max_instances, "method", &method, "contrast-threshold", &contrast,
+               nullptr);
+  fail_unless_equals_float(contrast, 0.03);
   fail_unless_equals_float(ratio, 0.7);
   fail_unless_equals_float(bandwidth, 12.0);
   fail_unless_equals_int(min_matches, 9);
