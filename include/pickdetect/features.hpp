@@ -30,8 +30,8 @@ constexpr double kSiftContrastThreshold = 0.04;
 
 /// Features of a grey picture (CV_8UC1, any stride); an optional mask limits where keypoints
 /// lie. Positions are in the picture's pixels with pixel centres on integers.
-/// `contrast_threshold`: SIFT's (lower keeps weaker extrema too; see exposure_contrast_share);
-/// ORB ignores it.
+/// `contrast_threshold`: SIFT's (lower keeps weaker extrema too; see exposure_contrast_share;
+/// negative or NaN: kSiftContrastThreshold); ORB ignores it.
 Features extract_features(const cv::Mat& grey, const cv::Mat& mask = cv::Mat(),
                           FeatureKind kind = FeatureKind::Sift,
                           double contrast_threshold = kSiftContrastThreshold);
