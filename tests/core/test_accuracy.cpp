@@ -72,6 +72,14 @@ cv::Mat make_heap(const std::vector<cv::Mat>& boxes, const std::vector<cv::Mat>&
   return scene;
 }
 
+/// Pictures of other textures for the floor under the heaps.
+std::vector<cv::Mat> distractor_pictures() {
+  std::vector<cv::Mat> out;
+  for (const char* name : {"graf1.png", "building.jpg", "fruits.jpg"})
+    out.push_back(cv::imread(kData + "/" + name, cv::IMREAD_GRAYSCALE));
+  return out;
+}
+
 /// One method's figures on the built-in heaps; centre errors per (scene, true instance), NaN
 /// where the method missed it.
 struct Score {
@@ -148,9 +156,7 @@ double mean_where_all_found(const std::vector<double>& of, const std::vector<con
 /// complete as both RANSAC baselines and places the instances they all find more exactly.
 TEST(Accuracy, VotingKeepsTheTargetsOnBuiltInHeaps) {
   const cv::Mat box = cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
-  std::vector<cv::Mat> distractors;
-  for (const char* name : {"graf1.png", "building.jpg", "fruits.jpg"})
-    distractors.push_back(cv::imread(kData + "/" + name, cv::IMREAD_GRAYSCALE));
+  const std::vector<cv::Mat> distractors = distractor_pictures();
   const Detector detector({load_model(kData + "/box.png")});
   cv::RNG rng(1234);
 
@@ -251,9 +257,7 @@ TEST(Accuracy, VotingNamesEachProductOfALookAlikeFamily) {
 /// keypoints; the frame's exposure sets it, so the boxes are found as in full light.
 TEST(Accuracy, VotingFindsTheBoxesInADimFrame) {
   const cv::Mat box = cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
-  std::vector<cv::Mat> distractors;
-  for (const char* name : {"graf1.png", "building.jpg", "fruits.jpg"})
-    distractors.push_back(cv::imread(kData + "/" + name, cv::IMREAD_GRAYSCALE));
+  const std::vector<cv::Mat> distractors = distractor_pictures();
   const Detector detector({load_model(kData + "/box.png")});
   auto run = [&](const Settings& settings, bool report) {
     cv::RNG rng(2468);
