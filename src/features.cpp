@@ -46,9 +46,12 @@ Features orb_features(const cv::Mat& grey, const cv::Mat& mask) {
 
 /// Every fourth row and column is enough for the percentiles of a frame's grey.
 constexpr int kExposureStride = 4;
-/// A frame whose grey spans (1st to 99th percentile) less than this is taken as exposed darker
-/// or flatter than a well-lit one: every contrast in it, the objects' too, is that much weaker.
-constexpr double kWellLitSpan = 128.0;
+/// The frame's grey span runs from this share of its (sampled) pixels to the same share from
+/// the top: few enough that a few small objects on a plain conveyor set it, not the belt.
+constexpr double kSpanTail = 0.001;
+/// A frame whose grey spans less than this is taken as exposed darker or flatter than a
+/// well-lit one: every contrast in it, the objects' too, is that much weaker.
+constexpr double kWellLitSpan = 200.0;
 /// The threshold follows the span down to this share of OpenCV's, no lower: below, the extra
 /// extrema are the sensor's noise.
 constexpr double kLeastContrastShare = 0.25;
@@ -74,7 +77,7 @@ double exposure_contrast_share(const cv::Mat& grey) {
         return v;
     return 255;
   };
-  const double span = percentile(0.99) - percentile(0.01);
+  const double span = percentile(1.0 - kSpanTail) - percentile(kSpanTail);
   return std::clamp(span / kWellLitSpan, kLeastContrastShare, 1.0);
 }
 

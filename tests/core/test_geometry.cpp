@@ -282,7 +282,7 @@ TEST(Features, KeypointsSitWhereTheBlobIs) {
 
 TEST(Features, TheContrastThresholdFollowsTheFramesExposure) {
   // A ramp over every grey level spans about 250 of them: well lit. Dimmed or flattened to 30 %
-  // of that span, 75 of them: 75 / 128 of the threshold. Uniform grey: the least share.
+  // of that span, 76 of them: 76 / 200 of the threshold. Uniform grey: the least share.
   cv::Mat ramp(64, 256, CV_8UC1);
   for (int x = 0; x < ramp.cols; ++x)
     ramp.col(x).setTo(x);
@@ -290,9 +290,18 @@ TEST(Features, TheContrastThresholdFollowsTheFramesExposure) {
   ramp.convertTo(dim, CV_8UC1, 0.3);
   ramp.convertTo(flat, CV_8UC1, 0.3, 120.0);
   EXPECT_DOUBLE_EQ(exposure_contrast_share(ramp), 1.0);
-  EXPECT_NEAR(exposure_contrast_share(dim), 75.0 / 128, 0.02);
+  EXPECT_NEAR(exposure_contrast_share(dim), 76.0 / 200, 0.02);
   EXPECT_NEAR(exposure_contrast_share(flat), exposure_contrast_share(dim), 0.01);
   EXPECT_DOUBLE_EQ(exposure_contrast_share(cv::Mat(64, 64, CV_8UC1, cv::Scalar(90))), 0.25);
+  // A plain, noisy belt with one small printed object (1 % of the frame) is well lit: the
+  // object's print sets the span, not the belt.
+  cv::Mat belt(400, 400, CV_8UC1);
+  cv::randn(belt, 110, 4);
+  cv::Mat object = belt(cv::Rect(180, 180, 40, 40));
+  for (int y = 0; y < object.rows; ++y)
+    for (int x = 0; x < object.cols; ++x)
+      object.at<uchar>(y, x) = ((x / 5 + y / 5) % 2) ? 230 : 15;
+  EXPECT_DOUBLE_EQ(exposure_contrast_share(belt), 1.0);
   // The lower threshold keeps many more of a dim picture's keypoints.
   const cv::Mat graf =
       cv::imread(std::string(PICKDETECT_TEST_DATA) + "/graf1.png", cv::IMREAD_GRAYSCALE);
