@@ -44,7 +44,7 @@ Features extract_features_scaled(const cv::Mat& grey, double scale,
 
 /// How much of SIFT's contrast threshold (kSiftContrastThreshold) suits a frame of this
 /// exposure (CV_8UC1; the detector's default, Settings::contrast_threshold 0): 1 for a
-/// frame whose grey spans 200 levels or more (from the 0.1th to the 99.9th percentile, so
+/// frame whose grey spans 200 levels or more (between the 0.1 and 99.9 percentiles, so
 /// that a few small objects on a plain belt set it), that span / 200 for a dimmer or flatter
 /// one, 0.25 at the least. In a frame taken with a quarter of the light every contrast is a
 /// quarter as strong, the objects' too: with OpenCV's fixed threshold SIFT would find few of
