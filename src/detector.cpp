@@ -90,11 +90,12 @@ Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const 
   if (grey.cols < kMinFrameSide || grey.rows < kMinFrameSide)
     return result;
   const auto t0 = Clock::now();
-  // By default the contrast threshold follows the frame's exposure: a dim frame keeps its
-  // weaker extrema.
-  const double contrast = settings.contrast_threshold > 0.0
-                              ? settings.contrast_threshold
-                              : kSiftContrastThreshold * exposure_contrast_share(grey);
+  // By default SIFT's contrast threshold follows the frame's exposure: a dim frame keeps its
+  // weaker extrema. ORB has no use for it.
+  const double contrast = settings.contrast_threshold > 0.0 ? settings.contrast_threshold
+                          : settings.features == FeatureKind::Sift
+                              ? kSiftContrastThreshold * exposure_contrast_share(grey)
+                              : kSiftContrastThreshold;
   const Features scene =
       extract_features_scaled(grey, settings.detection_scale, settings.features, contrast);
   const double features_ms = ms_since(t0);
