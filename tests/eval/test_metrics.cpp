@@ -388,6 +388,17 @@ TEST(Dataset, ErrorsNameTheFileAndTheField) {
             "polygon": [[0, 0], [1, 0], [1, 1]], "visible": 1}]}]})"),
             "here/dataset.json: scenes[0].instances[0].points: has 2 points but model 'box' has "
             "1 principal points");
+  // A don't-care instance (a look-alike surface listed with visible 0) may leave its points
+  // out; a required one may not.
+  EXPECT_EQ(message("{" + good_model + R"(, "scenes": [{"image": "a.png", "width": 10,
+            "height": 10, "instances": [{"model": "box", "points": [],
+            "polygon": [[0, 0], [1, 0], [1, 1]], "visible": 0}]}]})"),
+            "no error");
+  EXPECT_EQ(message("{" + good_model + R"(, "scenes": [{"image": "a.png", "width": 10,
+            "height": 10, "instances": [{"model": "box", "points": [],
+            "polygon": [[0, 0], [1, 0], [1, 1]], "visible": 0.5}]}]})"),
+            "here/dataset.json: scenes[0].instances[0].points: has 0 points but model 'box' has "
+            "1 principal points");
   EXPECT_EQ(message(R"({"scenes": []})"), "here/dataset.json: models: missing");
   EXPECT_EQ(message("{" + good_model + R"(, "scenes": [{"image": "a.png", "width": 10,
             "height": 10, "instances": [{"model": "box", "points": [[1, 1]],

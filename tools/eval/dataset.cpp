@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #include "dataset.hpp"
+#include "metrics.hpp"
 
 #include <json-glib/json-glib.h>
 
@@ -286,13 +287,16 @@ Dataset parse_dataset(const std::string& text, const std::string& origin, const 
       const ModelInfo* model = ds.find_model(t.model);
       if (!model)
         r.fail(f + ".model", "'" + t.model + "' is not one of the dataset's models");
+      t.visible = r.fraction(r.required(o, "visible", f), f + ".visible");
       t.points = r.points(r.required(o, "points", f), f + ".points");
-      if (t.points.size() != model->principal_points.size())
+      // A don't-care instance (a look-alike surface listed with visible 0) may leave its points
+      // out: it is never scored by them.
+      const bool dont_care_without_points = t.points.empty() && t.visible < kDontCareVisible;
+      if (t.points.size() != model->principal_points.size() && !dont_care_without_points)
         r.fail(f + ".points",
                "has " + std::to_string(t.points.size()) + " points but model '" + t.model +
                    "' has " + std::to_string(model->principal_points.size()) + " principal points");
       t.polygon = r.polygon(r.required(o, "polygon", f), f + ".polygon");
-      t.visible = r.fraction(r.required(o, "visible", f), f + ".visible");
       if (JsonNode* n = Reader::member(o, "covered"))
         t.covered = r.fraction(n, f + ".covered");
       if (JsonNode* n = Reader::member(o, "in_frame"))

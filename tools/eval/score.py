@@ -232,10 +232,14 @@ def load_dataset(path):
             if model not in ds["models"]:
                 raise FormatError("%s: %s.model: '%s' is not one of the dataset's models"
                                   % (path, wi, model))
+            visible = number(need(t, "visible", wi, path), wi + ".visible", path)
+            # A don't-care instance (a look-alike surface listed with visible 0) may leave its
+            # points out: it is never scored by them.
+            least = 0 if visible < DONT_CARE_VISIBLE else 1
             inst = {"model": model,
-                    "points": points(need(t, "points", wi, path), wi + ".points", path, 1),
+                    "points": points(need(t, "points", wi, path), wi + ".points", path, least),
                     "polygon": points(need(t, "polygon", wi, path), wi + ".polygon", path, 3),
-                    "visible": number(need(t, "visible", wi, path), wi + ".visible", path),
+                    "visible": visible,
                     "covered": None}
             if "covered" in t:
                 inst["covered"] = number(t["covered"], wi + ".covered", path)
