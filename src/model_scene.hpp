@@ -73,4 +73,12 @@ void refine_robustly(const ModelScene& ms, const std::vector<int>& in, bool allo
 bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow_scale,
                         const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h);
 
+/// A face tilted away from the camera (refine.cpp): an affine pose found by RANSAC among the
+/// hypothesis' `members` and the unclaimed matches around the similarity `pose`, then refitted
+/// as a homography on its inliers; true (with `in` its inliers and `h` the map) when it
+/// gathers clearly more inliers than the similarity's `in`.
+bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool allow_scale,
+                          const std::vector<int>& members, const std::vector<char>& claimed,
+                          std::vector<int>& in, cv::Matx33d& h);
+
 } // namespace pickdetect::detail

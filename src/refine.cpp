@@ -3,6 +3,9 @@
 // homography where enough well-spread inliers allow it (objects tilted out of the plane).
 #include "model_scene.hpp"
 
+#include "polygon.hpp"
+
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -30,6 +33,17 @@ constexpr double kMinPerspectiveSpread = 0.2;
 /// ...and it is kept only if no outline point moves farther than this share of the model's
 /// smaller side from where the similarity puts it.
 constexpr double kMaxPerspectiveShift = 0.15;
+/// A face tilted away from the camera is foreshortened along one axis: a similarity then fits
+/// only a part of it, and its votes scatter along that axis. Its pose is searched as an affine
+/// map (RANSAC) over the hypothesis' votes and the matches on its outline grown by this factor,
+/// when they are at least kMinForeshortenedMatches...
+constexpr double kForeshortenedReach = 1.5;
+constexpr size_t kMinForeshortenedMatches = 8;
+/// ...kept when its axes' scales differ by no more than this factor (a face seen up to about
+/// 70 degrees off its normal) and it gathers at least kForeshortenedGain times the
+/// similarity's inliers.
+constexpr double kMaxForeshortening = 0.35;
+constexpr double kForeshortenedGain = 1.2;
 
 /// Matches (indices into ms.matches, not yet claimed) consistent with a pose: `map` (the pose
 /// itself, or a homography close to it) carries the model keypoint to within the inlier distance
@@ -169,6 +183,72 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
   }
   if (!found)
     return false;
+  in = std::move(current);
+  return true;
+}
+
+bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool allow_scale,
+                          const std::vector<int>& members, const std::vector<char>& claimed,
+                          std::vector<int>& in, cv::Matx33d& h) {
+  if (!allow_scale)
+    return false;
+  // Candidates: the hypothesis' own votes and every unclaimed match of the same rotation on
+  // the similarity's outline grown by half (the far end of a foreshortened face).
+  const std::vector<cv::Point2f> outline = pose.apply(ms.model.outline);
+  const cv::Point2f c = pose.apply(ms.model.principal_points[0]);
+  std::vector<cv::Point2f> grown;
+  for (const cv::Point2f& p : outline)
+    grown.push_back(c + (p - c) * kForeshortenedReach);
+  std::vector<char> candidate(ms.matches.size(), 0);
+  for (int i : members)
+    candidate[i] = !claimed[i];
+  for (const int i : ms.match_grid.inside(bounds(grown))) {
+    if (claimed[i] || angle_difference(ms.votes[i].angle, pose.angle) > kInlierAngleDeg)
+      continue;
+    if (cv::pointPolygonTest(grown, ms.scene_keypoints[ms.matches[i].scene_point].pt, false) >= 0)
+      candidate[i] = 1;
+  }
+  std::vector<int> pool;
+  for (size_t i = 0; i < candidate.size(); ++i)
+    if (candidate[i])
+      pool.push_back(static_cast<int>(i));
+  if (pool.size() < kMinForeshortenedMatches || pool.size() <= in.size())
+    return false;
+  const double tol = inlier_distance(ms, pose.scale);
+  cv::Mat mask;
+  const cv::Mat a = cv::estimateAffine2D(model_points(ms, pool), scene_points(ms, pool), mask,
+                                         cv::RANSAC, tol, 2000, 0.995, 10);
+  if (a.empty())
+    return false;
+  cv::Matx33d map(a.at<double>(0, 0), a.at<double>(0, 1), a.at<double>(0, 2), a.at<double>(1, 0),
+                  a.at<double>(1, 1), a.at<double>(1, 2), 0, 0, 1);
+  // A face seen from its front side (no mirror), foreshortened at most kMaxForeshortening.
+  const double det = map(0, 0) * map(1, 1) - map(0, 1) * map(1, 0);
+  if (!(det > 0.0))
+    return false;
+  cv::Mat sv;
+  cv::SVD::compute(cv::Mat(cv::Matx22d(map(0, 0), map(0, 1), map(1, 0), map(1, 1))), sv);
+  if (sv.at<double>(1) < kMaxForeshortening * sv.at<double>(0))
+    return false;
+  std::vector<int> current = inliers_of(ms, pose, map, allow_scale, claimed);
+  if (current.size() < kMinForeshortenedMatches ||
+      static_cast<double>(current.size()) < kForeshortenedGain * static_cast<double>(in.size()))
+    return false;
+  // Then a homography on those inliers (the far end smaller), while it gathers more.
+  for (int round = 0; round < kRefineRounds; ++round) {
+    cv::Matx33d next;
+    if (!fit_homography(model_points(ms, current), scene_points(ms, current), map, next, {},
+                        Loss::Cauchy))
+      break;
+    std::vector<int> again = inliers_of(ms, pose, next, allow_scale, claimed);
+    if (again.size() < current.size())
+      break;
+    map = next;
+    if (again == current)
+      break;
+    current = std::move(again);
+  }
+  h = map;
   in = std::move(current);
   return true;
 }

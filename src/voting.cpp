@@ -244,7 +244,9 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
         continue;
       cv::Matx33d h;
       // Without allow_scale the objects keep the model's size: the pose stays rigid.
-      if (s.allow_scale && refine_perspective(ms, pose, s.allow_scale, claimed, in, h)) {
+      if (refine_foreshortened(ms, pose, s.allow_scale, members, claimed, in, h)) {
+        place(inst, ms.model, h);
+      } else if (s.allow_scale && refine_perspective(ms, pose, s.allow_scale, claimed, in, h)) {
         place(inst, ms.model, h);
       } else {
         refine_robustly(ms, in, s.allow_scale, pose);
