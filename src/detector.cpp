@@ -4,6 +4,7 @@
 
 #include "look_alikes.hpp"
 #include "model_scene.hpp"
+#include "scene_explanation.hpp"
 
 #include <pickdetect/error.hpp>
 #include <pickdetect/meanshift.hpp>
@@ -170,6 +171,7 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
   }
   if (share) {
     const int fewest = std::max(1, s.min_matches);
+    detail::explain_scene(result.instances, models_, scene, s.features, fewest);
     detail::drop_look_alikes(result.instances, fewest / 2 + fewest % 2); // half, rounded up
     drop_hidden_instances(result.instances, models_, s.features);
   }

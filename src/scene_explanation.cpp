@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Scene-level verification: the instances of all models compete for the frame's keypoints.
+#include "scene_explanation.hpp"
+
+#include "model_scene.hpp"
+#include "point_grid.hpp"
+#include "polygon.hpp"
+
+#include <pickdetect/pose.hpp>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace pickdetect::detail {
+namespace {
+
+/// A scene keypoint agrees with an instance when a model keypoint lies within this share of the
+/// model's smaller side (at least kMinPlacePx scene pixels) of where the instance's pose carries
+/// the scene keypoint back into the model...
+constexpr double kPlaceShare = 0.02;
+constexpr double kMinPlacePx = 3.0;
+/// ...with the rotation and size ratio the pose predicts there (as for the refinement's
+/// inliers)...
+constexpr double kAngleDeg = 30.0;
+constexpr double kScaleFactor = 1.5;
+/// ...and a descriptor within this distance of the scene keypoint's: L2 for SIFT, whose
+/// descriptors OpenCV scales to a norm of 512 (on the real tote, 300-400 explained the same
+/// keypoints, 250 lost blurred true ones), Hamming for ORB's 256 bits.
+constexpr double kAgreeSiftDistance = 300.0;
+constexpr double kAgreeOrbDistance = 64.0;
+/// An instance is kept when nearly all the keypoints it explains are its own: a few may lie on
+/// an edge it shares with a neighbour.
+constexpr double kOwnShare = 0.9;
+
+/// The scene keypoints (indices) that instance `inst` of `model` explains.
+std::vector<int> explained(const Instance& inst, const PointGrid& model_grid, double model_radius,
+                           const Features& model_features, const Features& scene,
+                           const PointGrid& scene_grid, FeatureKind kind) {
+  std::vector<int> out;
+  cv::Matx33d back;
+  if (!cv::invert(inst.homography, back, cv::DECOMP_LU))
+    return out;
+  const cv::Rect2f box = bounds(inst.outline);
+  const double limit = kind == FeatureKind::Orb ? kAgreeOrbDistance : kAgreeSiftDistance;
+  const int norm = kind == FeatureKind::Orb ? cv::NORM_HAMMING : cv::NORM_L2;
+  for (int s : scene_grid.inside(box)) {
+    const cv::KeyPoint& ks = scene.keypoints[s];
+    if (cv::pointPolygonTest(inst.outline, ks.pt, false) < 0)
+      continue;
+    const cv::Vec3d q = back * cv::Vec3d(ks.pt.x, ks.pt.y, 1.0);
+    if (!(q[2] > 0.0))
+      continue;
+    const cv::Point2d at(q[0] / q[2], q[1] / q[2]);
+    double best = limit;
+    bool agrees = false;
+    model_grid.for_neighbours(at, [&](int k) {
+      const cv::KeyPoint& km = model_features.keypoints[k];
+      const cv::Point2d d(km.pt.x - at.x, km.pt.y - at.y);
+      if (d.dot(d) > model_radius * model_radius)
+        return;
+      if (angle_difference(ks.angle - km.angle, inst.angle) > kAngleDeg)
+        return;
+      const double ratio = km.size > 0.f ? ks.size / km.size / inst.scale : 1.0;
+      if (ratio > kScaleFactor || ratio < 1.0 / kScaleFactor)
+        return;
+      const double dist =
+          cv::norm(scene.descriptors.row(s), model_features.descriptors.row(k), norm);
+      if (dist <= best) {
+        best = dist;
+        agrees = true;
+      }
+    });
+    if (agrees)
+      out.push_back(s);
+  }
+  return out;
+}
+
+} // namespace
+
+void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& models,
+                   const Features& scene, FeatureKind kind, int min_matches) {
+  const size_t n = instances.size();
+  if (n == 0 || scene.keypoints.empty())
+    return;
+  std::vector<cv::Point2f> at;
+  at.reserve(scene.keypoints.size());
+  for (const cv::KeyPoint& k : scene.keypoints)
+    at.push_back(k.pt);
+  double smallest_side = 1e9;
+  for (const Instance& inst : instances)
+    smallest_side = std::min(smallest_side, model_side(models[inst.model]) * inst.scale);
+  const PointGrid scene_grid(std::move(at), std::max(8.0, 0.5 * smallest_side));
+
+  // Each model's keypoints on a grid of the search radius, built for the models found.
+  std::vector<PointGrid> model_grid(models.size());
+  std::vector<double> radius(models.size(), 0.0);
+  std::vector<char> built(models.size(), 0);
+  std::vector<std::vector<int>> explains(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Instance& inst = instances[i];
+    const Model& model = models[inst.model];
+    const Features& f = model.features(kind);
+    const double r =
+        std::max(kMinPlacePx / std::max(inst.scale, 1e-3), kPlaceShare * model_side(model));
+    if (!built[inst.model] || radius[inst.model] < r) {
+      std::vector<cv::Point2f> pts;
+      for (const cv::KeyPoint& k : f.keypoints)
+        pts.push_back(k.pt);
+      radius[inst.model] = std::max(r, radius[inst.model]);
+      model_grid[inst.model] = PointGrid(std::move(pts), radius[inst.model]);
+      built[inst.model] = 1;
+    }
+    explains[i] = explained(inst, model_grid[inst.model], r, f, scene, scene_grid, kind);
+  }
+
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return explains[a].size() > explains[b].size(); });
+  std::vector<int> taken(scene.keypoints.size(), 0);
+  std::vector<char> keep(n, 0);
+  for (size_t i : order) {
+    size_t own = 0;
+    for (int s : explains[i])
+      own += !taken[s];
+    if (static_cast<int>(own) < min_matches ||
+        static_cast<double>(own) < kOwnShare * static_cast<double>(explains[i].size()))
+      continue;
+    keep[i] = 1;
+    for (int s : explains[i])
+      taken[s] = 1;
+  }
+  std::vector<Instance> kept;
+  for (size_t i = 0; i < n; ++i)
+    if (keep[i])
+      kept.push_back(std::move(instances[i]));
+  instances = std::move(kept);
+}
+
+} // namespace pickdetect::detail

@@ -1,0 +1,24 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Internal to the core: the set of instances that together explain the frame's features.
+#pragma once
+
+#include <pickdetect/detector.hpp>
+#include <pickdetect/features.hpp>
+#include <pickdetect/model.hpp>
+
+#include <vector>
+
+namespace pickdetect::detail {
+
+/// One visible surface, one object. Each instance claims the scene keypoints it explains: those
+/// that lie on its outline and whose descriptor resembles that of a model keypoint where its
+/// pose puts that keypoint (same place, rotation and size). Instances are taken in order of how
+/// many keypoints they explain, each keypoint going to the first that explains it; an instance
+/// is kept only when it still explains at least `min_matches` keypoints of its own and at least
+/// half of all those it explains. A copy of an instance shifted along a repeated design, a
+/// second pose of one object and an instance spanning two neighbours rest on keypoints that a
+/// better instance explains, and lose to it.
+void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& models,
+                   const Features& scene, FeatureKind kind, int min_matches);
+
+} // namespace pickdetect::detail

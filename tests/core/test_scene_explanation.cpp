@@ -1,0 +1,134 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Packed rows and tilted faces: one visible surface is one object, and a face seen far off its
+// normal is placed by all of its evidence.
+#include "../../src/scene_explanation.hpp"
+#include "../common/box.hpp"
+#include "../common/scene.hpp"
+
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <vector>
+
+using namespace pickdetect;
+using pickdetect::test_scene::box_detector;
+using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::Pose;
+
+namespace {
+
+/// `count` boxes side by side along x, touching, upright, at `scale`, centred in the frame.
+cv::Mat packed_row(int count, double scale, std::vector<Pose>& poses) {
+  const cv::Mat& box = box_model().image;
+  const double width = box.cols * scale;
+  const cv::Size frame(static_cast<int>(width * count) + 160,
+                       static_cast<int>(box.rows * scale) + 160);
+  cv::Mat scene = test_scene::plain_background(frame, 90);
+  poses.clear();
+  for (int k = 0; k < count; ++k)
+    poses.push_back({{static_cast<float>(80 + width * (k + 0.5)), frame.height / 2.f}, 0.0, scale});
+  test_scene::paste(scene, box, poses);
+  return scene;
+}
+
+/// The instance whose centre lies nearest `at`, or nullptr.
+const Instance* nearest(const std::vector<Instance>& instances, cv::Point2f at) {
+  const Instance* best = nullptr;
+  for (const Instance& inst : instances)
+    if (!best || cv::norm(inst.center - at) < cv::norm(best->center - at))
+      best = &inst;
+  return best;
+}
+
+/// A copy of `inst` carried by `move` (scene pixels to scene pixels) after its own pose.
+Instance moved(const Instance& inst, const cv::Matx33d& move) {
+  Instance copy = inst;
+  copy.homography = move * inst.homography;
+  std::vector<cv::Point2f> points;
+  cv::perspectiveTransform(box_model().principal_points, copy.points, cv::Mat(copy.homography));
+  cv::perspectiveTransform(box_model().outline, copy.outline, cv::Mat(copy.homography));
+  copy.center = copy.points[0];
+  return copy;
+}
+
+TEST(SceneExplanation, TouchingIdenticalBoxesAreEachFoundOnce) {
+  std::vector<Pose> poses;
+  const cv::Mat scene = packed_row(4, 0.5, poses);
+  const Detection d = box_detector().detect(scene);
+  ASSERT_EQ(d.instances.size(), poses.size()) << "four touching boxes, one instance each";
+  for (const Pose& p : poses) {
+    const Instance* inst = nearest(d.instances, p.center);
+    ASSERT_NE(inst, nullptr);
+    EXPECT_LT(cv::norm(inst->center - p.center), 1.5)
+        << "expected a box at (" << p.center.x << ", " << p.center.y << "), nearest at ("
+        << inst->center.x << ", " << inst->center.y << ")";
+  }
+}
+
+TEST(SceneExplanation, ShiftedAndTurnedCopiesLoseToTheTrueInstances) {
+  std::vector<Pose> poses;
+  const cv::Mat scene = packed_row(3, 0.5, poses);
+  const Features features = extract_features(scene);
+  std::vector<Instance> instances = box_detector().detect(features, scene.size()).instances;
+  ASSERT_EQ(instances.size(), poses.size());
+  const Instance first = instances[0];
+  const double half = 0.5 * box_model().image.cols * 0.5;
+  const cv::Point2f c = first.center;
+  // Half a box along the row (spanning two neighbours), and the box turned half a turn.
+  const cv::Matx33d shift(1, 0, half, 0, 1, 0, 0, 0, 1);
+  const cv::Matx33d turn(-1, 0, 2 * c.x, 0, -1, 2 * c.y, 0, 0, 1);
+  instances.push_back(moved(first, shift));
+  instances.push_back(moved(first, turn));
+  for (Instance& inst : instances)
+    inst.matches = 40; // the copies claim as much evidence as any true instance
+  detail::explain_scene(instances, box_detector().models(), features, FeatureKind::Sift, 4);
+  ASSERT_EQ(instances.size(), poses.size()) << "the shifted and the turned copy must be dropped";
+  for (const Pose& p : poses) {
+    const Instance* inst = nearest(instances, p.center);
+    EXPECT_LT(cv::norm(inst->center - p.center), 1.5)
+        << "expected a box at (" << p.center.x << ", " << p.center.y << "), nearest at ("
+        << inst->center.x << ", " << inst->center.y << ")";
+    EXPECT_LT(std::abs(inst->homography(0, 0) - first.homography(0, 0)), 0.05)
+        << "a kept instance is turned: the turned copy survived";
+  }
+}
+
+TEST(SceneExplanation, AFaceTiltedFarFromTheCameraIsPlacedByAllItsEvidence) {
+  // The box's face turned 55 degrees about its horizontal axis, seen from 600 px away:
+  // foreshortened to about 0.6 of its height, the far edge smaller.
+  const cv::Mat& box = box_model().image;
+  const double tilt = 55.0 * CV_PI / 180.0, f = 600.0, scale = 0.9;
+  const cv::Size frame(640, 480);
+  std::vector<cv::Point2f> corners = {{0.f, 0.f},
+                                      {static_cast<float>(box.cols), 0.f},
+                                      {static_cast<float>(box.cols), static_cast<float>(box.rows)},
+                                      {0.f, static_cast<float>(box.rows)}};
+  std::vector<cv::Point2f> seen;
+  for (const cv::Point2f& p : corners) {
+    const double x = (p.x - box.cols / 2.0) * scale, y = (p.y - box.rows / 2.0) * scale;
+    const double yc = y * std::cos(tilt), zc = f + y * std::sin(tilt);
+    seen.emplace_back(static_cast<float>(frame.width / 2.0 + f * x / zc),
+                      static_cast<float>(frame.height / 2.0 + f * yc / zc));
+  }
+  const cv::Matx33d h(cv::getPerspectiveTransform(corners, seen));
+  cv::Mat scene = test_scene::plain_background(frame, 100), warped, mask;
+  cv::warpPerspective(box, warped, cv::Mat(h), frame, cv::INTER_AREA);
+  cv::warpPerspective(cv::Mat(box.size(), CV_8UC1, cv::Scalar(255)), mask, cv::Mat(h), frame,
+                      cv::INTER_NEAREST);
+  warped.copyTo(scene, mask);
+  const Detection d = box_detector().detect(scene);
+  ASSERT_EQ(d.instances.size(), 1u) << "one tilted box, one instance";
+  const Instance& inst = d.instances[0];
+  std::vector<cv::Point2f> truth;
+  cv::perspectiveTransform(box_model().principal_points, truth, cv::Mat(h));
+  for (size_t k = 0; k < truth.size(); ++k)
+    EXPECT_LT(cv::norm(inst.points[k] - truth[k]), 3.0)
+        << "principal point " << k << ": expected (" << truth[k].x << ", " << truth[k].y
+        << "), got (" << inst.points[k].x << ", " << inst.points[k].y << ")";
+}
+
+} // namespace
