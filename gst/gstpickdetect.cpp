@@ -3,92 +3,31 @@
  * SECTION:element-pickdetect
  * @title: pickdetect
  *
- * Finds every instance of one or several known objects in each video frame, for pick-and-place:
- * SIFT features of the frame are extracted once and matched against those of all the model
- * pictures together (a feature that fits two models about equally well decides for neither),
- * every match votes for where its object's principal points (centre, grasping / delimiting
- * points) lie, and mean shift gathers the votes into instances. Each instance comes with its
- * model's name, centre, angle, scale, principal points, outline, score, visibility, whether
- * another instance or an object of no model lies on it (covered), whether it can be picked and
- * in which order, and its grasp point. Which of two overlapping instances lies on top, and so which
- * can be picked, is decided by the detection core; the element reports it as it is.
+ * Finds every instance of one or several known objects in each video frame, for pick-and-place,
+ * by the method of "Multiple Object Detection for Pick-and-Place Applications": SIFT features of
+ * the frame, matched against those of all the model pictures at once, vote for where each
+ * object's principal points (centre, grasping and delimiting points) lie, and mean shift gathers
+ * the votes into instances; the paper's two RANSAC baselines can be chosen instead. Each instance
+ * comes with its model's name, pose, principal points, outline, score, visibility, whether
+ * something lies on it (covered), whether it can be picked and in which order, and its grasp
+ * point. The frame is worked on in place; its pixels change only with #GstPickDetect:draw.
  *
- * The frame is worked on in place and its pixels are left untouched unless #GstPickDetect:draw
- * is set. Detection reads the grey or luma plane of the frame where the format has one, and a
- * grey conversion of packed RGB otherwise.
- *
- * Every buffer that goes through gets, also when nothing was found:
- * - one GstPickDetectMeta (see gst/pickdetect/pickdetect-meta.h, pkg-config
- *   gstreamer-pickdetect-meta-1.0) holding all instances;
- * - one #GstVideoRegionOfInterestMeta per instance: roi_type is the model name, the rectangle
- *   the outline's bounding box clipped to the frame, and a "pick-instance" #GstStructure param
- *   with fields model (string), center-x, center-y, angle, scale, score, visibility, grasp-x,
- *   grasp-y, grasp-angle (double), matches, pick-order (int), covered, pickable (boolean),
- *   points and outline (#GstValueArray of doubles x0, y0, x1, y1, ...; points starts with the
- * centre). Through videoscale GStreamer rescales the ROI rectangle but copies its params as they
- * are, so after scaling read coordinates from the GstPickDetectMeta, which is rescaled whole.
- *
- * With #GstPickDetect:post-messages (the default, as facedetect's updates=every_frame), an
- * element message named "pickdetect" is posted for each frame, with fields timestamp,
- * stream-time, running-time, duration (guint64) and instances (a #GstValueList of the
- * "pick-instance" structures above), and the time the frame took in each stage, in milliseconds
- * (gdouble): features-ms (feature extraction), matching-ms, clustering-ms (voting or RANSAC,
- * mean shift, poses and occlusion), metadata-ms (attaching the metas) and overlay-ms (drawing;
- * 0 without #GstPickDetect:draw).
- *
- * Properties: #GstPickDetect:model names the objects to find: a model file (.yml / .yaml), a
- * plain picture of the object, or a model-set file (a YAML file with a `models:` list of model
- * files and pictures, relative to the set file), or several of these separated by commas
- * (`model=cookies.yml,flyer.yml`). All models are searched for together in every frame and
- * each instance names its model; model names must differ. #GstPickDetect:method chooses voting (the
- * paper's method) or one of the RANSAC baselines; #GstPickDetect:ratio is the 2NN ratio test
- * threshold; #GstPickDetect:min-matches is the fewest matches an instance needs;
- * #GstPickDetect:bandwidth is the mean-shift radius in pixels (0 = automatic);
- * #GstPickDetect:max-instances caps the instances per frame, over all models (0 = no limit);
- * #GstPickDetect:allow-scale lets instances be larger or smaller than the model;
- * #GstPickDetect:features chooses SIFT (the paper's) or the much cheaper ORB;
- * #GstPickDetect:detection-scale extracts the features from the frame shrunk by that factor
- * (coordinates stay in frame pixels); #GstPickDetect:refine refits each instance on its own
- * inlier matches and shares the features of look-alike models (off: the paper's plain voting);
- * #GstPickDetect:draw draws the instances into the frame (pickable ones outlined in green with
- * their pick order, covered ones in red, each labelled with its model's name);
- * #GstPickDetect:post-messages posts
- * the bus messages. All can be changed while playing; a frame is always processed with one
- * consistent set of them.
- *
- * #GstPickDetect:threads detects several frames at once, each on a thread of its own (0: one
- * per CPU core). Frames, their metas and their bus messages still come out in their order, and
- * serialized events (caps, segments, EOS...) wait for the frames before them; a flush drops the
- * frames in the works. Each frame thread beyond the first adds one frame of latency, which the
- * element adds to upstream's in the latency query. On two cores this raises the frames per
- * second by what OpenCV's own threads inside one frame leave unused.
- *
- * Quality of service is on (the base transform's #GstBaseTransform:qos, as GStreamer's video
- * filters have it): when a sink downstream reports that frames arrive late, as with a live
- * source faster than detection, the frames that are already too late are dropped before
- * detection (with a QoS message) instead of being queued up, so the latency stays bounded.
- *
- * A model that cannot be loaded when the element starts (READY to PAUSED) is an error
- * (resource not-found, open-read or settings, the message naming the file and the reason) and
- * the state change fails; so is starting with no model at all, a list with an empty entry, or
- * two models of the same name. Setting #GstPickDetect:model while playing (to add, remove or
- * replace models, give the whole new list) loads every model of the new value in the thread
- * that sets it (it may take a second) while frames keep going with the old ones; the new set
- * then takes effect between two frames, whole. If any of it fails to load, a warning is posted,
- * the old models stay and the property reads back the old value.
- *
- * Metadata policy: the element never changes the frame's geometry, so the metas of the input
- * buffer stay on it (it works in place); when a copy is needed, metas tagged only with video,
- * size, orientation or colorspace tags (or untagged) are copied. An upstream pickdetect's metas
- * are kept and this element's are added after them.
+ * Every buffer that goes through gets, also when nothing was found, one GstPickDetectMeta holding
+ * all instances (gst/pickdetect/pickdetect-meta.h, pkg-config gstreamer-pickdetect-meta-1.0;
+ * rescaled whole through videoscale) and one #GstVideoRegionOfInterestMeta per instance, whose
+ * roi_type is the model name and whose "pick-instance" #GstStructure param holds the same fields.
+ * With #GstPickDetect:post-messages an element message "pickdetect" per frame lists those
+ * structures and the time of each stage. The metas of the input buffer are kept; on a copy, metas
+ * tagged only with video, size, orientation or colorspace tags (or untagged) are copied.
  *
  * ## Example launch line
  * |[
  * gst-launch-1.0 filesrc location=/usr/share/doc/opencv-doc/examples/data/box_in_scene.png ! \
- *   pngdec ! imagefreeze num-buffers=30 ! videoconvert ! \
+ *   pngdec ! imagefreeze num-buffers=1 ! videoconvert ! \
  *   pickdetect model=/usr/share/doc/opencv-doc/examples/data/box.png draw=true ! \
- *   videoconvert ! autovideosink
- * ]| Shows the box found in the scene, outlined, with its centre and number of matches.
+ *   videoconvert ! pngenc ! filesink location=annotated.png
+ * ]| Writes annotated.png: the box found in the scene, outlined, with its centre and number of
+ * matches.
  */
 #include "gstpickdetect.h"
 
