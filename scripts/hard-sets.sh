@@ -3,7 +3,7 @@
 # pickdetect-synth and measures every method on each with pickdetect-eval at its defaults (all
 # models loaded). Writes OUT/SET/ (the dataset) and OUT/results/SET.{txt,json,jsonl}, then
 # prints the tables of docs/hard-sets.md (scripts/hard-sets-errors.py). Run from the worktree's
-# root after scripts/build.sh; OUT defaults to /work/data/hard (never commit the sets).
+# root after scripts/build.sh; OUT defaults to build/hard-sets (never commit the sets).
 #
 #   bash scripts/hard-sets.sh                # make the sets and measure them
 #   MAKE=0 bash scripts/hard-sets.sh         # measure the sets already made (the "after")
@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 S=${SYNTH:-build/tools/synth/pickdetect-synth}
 E=${EVAL:-build/tools/eval/pickdetect-eval}
 D=/usr/share/doc/opencv-doc/examples/data
-O=${OUT:-/work/data/hard}
+O=${OUT:-build/hard-sets}
 C="-n 12 --size 640x480 --seed 17"
 if [ "${MAKE:-1}" != 0 ]; then
   # The reference: the heaps and belts of soft-model and glare without either option.
