@@ -63,6 +63,13 @@
  * element adds to upstream's in the latency query. On two cores this raises the frames per
  * second by what OpenCV's own threads inside one frame leave unused.
  *
+ * With #GstPickDetect:calibration (a file written by pickdetect-calibrate), every instance is
+ * also placed on the work plane, in millimetres: the "pick-instance" structures gain world-x,
+ * world-y, world-angle, grasp-world-x, grasp-world-y, height (double) and world-outline (like
+ * outline), and the GstPickDetectInstance its world_* fields. The points are undistorted (the
+ * frame is not), and a model's `height` (mm) lifts its top face above the plane. A calibration
+ * file that cannot be loaded, or made for another frame size, is an error like a model.
+ *
  * Quality of service is on (the base transform's #GstBaseTransform:qos, as GStreamer's video
  * filters have it): when a sink downstream reports that frames arrive late, as with a live
  * source faster than detection, the frames that are already too late are dropped before
@@ -96,6 +103,7 @@
 #include "ordered-workers.hpp"
 
 #include <gst/pickdetect/pickdetect-meta.h>
+#include <pickdetect/calibration.hpp>
 #include <pickdetect/detector.hpp>
 #include <pickdetect/error.hpp>
 #include <pickdetect/model.hpp>
@@ -138,6 +146,7 @@ enum {
   PROP_DRAW,
   PROP_POST_MESSAGES,
   PROP_THREADS,
+  PROP_CALIBRATION,
 };
 
 #define DEFAULT_MODEL nullptr
@@ -154,6 +163,7 @@ constexpr gboolean DEFAULT_REFINE = TRUE;
 constexpr gboolean DEFAULT_DRAW = FALSE;
 constexpr gboolean DEFAULT_POST_MESSAGES = TRUE;
 constexpr int DEFAULT_THREADS = 1;
+#define DEFAULT_CALIBRATION nullptr
 
 // The element's defaults are the core's.
 static_assert(pickdetect::Settings{}.method == pickdetect::Method::Voting);
@@ -187,6 +197,7 @@ struct GstPickDetectPrivate {
   std::shared_ptr<const pickdetect::Detector> detector;
   int threads = DEFAULT_THREADS; ///< The `threads` property.
   int active_threads = 1;        ///< Frame threads since start (`threads` resolved).
+  std::string calibration_path;  ///< The `calibration` property (loaded at start).
   // ---- streaming thread (and state changes while it is stopped) only ----
   std::shared_ptr<const gstpickdetect::FrameFormat> format; ///< From the caps, for new frames.
   std::unique_ptr<gstpickdetect::OrderedWorkers> workers;   ///< With more than one frame thread.
@@ -510,6 +521,11 @@ static void gst_pick_detect_set_property(GObject* object, guint prop_id, const G
   case PROP_THREADS:
     priv->threads = g_value_get_int(value);
     break;
+  case PROP_CALIBRATION: {
+    const gchar* path = g_value_get_string(value);
+    priv->calibration_path = path ? path : "";
+    break;
+  }
   default:
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
     break;
@@ -569,6 +585,10 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
   case PROP_THREADS:
     g_value_set_int(value, priv->threads);
     break;
+  case PROP_CALIBRATION:
+    g_value_set_string(value,
+                       priv->calibration_path.empty() ? nullptr : priv->calibration_path.c_str());
+    break;
   default:
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
     break;
@@ -579,9 +599,62 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
 /* ------------------------------------------------------------------------------------------- */
 /* Start / stop / caps                                                                         */
 
+/// Loads the `calibration` file into the frame settings (none when the property is unset).
+/// False, with an error posted naming the file and the reason, when it cannot be loaded.
+static bool load_calibration_file(GstPickDetect* self) {
+  GstPickDetectPrivate* priv = self->priv;
+  GST_OBJECT_LOCK(self);
+  const std::string path = priv->calibration_path;
+  GST_OBJECT_UNLOCK(self);
+  std::shared_ptr<const pickdetect::Calibration> calibration;
+  if (!path.empty()) {
+    GST_INFO_OBJECT(self, "loading calibration %s", path.c_str());
+    try {
+      calibration =
+          std::make_shared<const pickdetect::Calibration>(pickdetect::load_calibration(path));
+    } catch (const std::exception& e) {
+      const std::string message = std::string("Could not load the calibration: ") + e.what();
+      GST_ERROR_OBJECT(self, "%s", message.c_str());
+      post_resource_message(self, GST_MESSAGE_ERROR, file_error_code(path), message,
+                            "calibration=" + path);
+      return false;
+    }
+  }
+  GST_OBJECT_LOCK(self);
+  priv->config.calibration = calibration;
+  GST_OBJECT_UNLOCK(self);
+  return true;
+}
+
+/// A homography calibration knows no camera, so it cannot raise the plane to a model's height:
+/// says so, once per start, when a model has one.
+static void warn_heights_ignored(GstPickDetect* self) {
+  GST_OBJECT_LOCK(self);
+  std::shared_ptr<const pickdetect::Calibration> calibration = self->priv->config.calibration;
+  std::shared_ptr<const pickdetect::Detector> detector = self->priv->detector;
+  const std::string path = self->priv->calibration_path;
+  GST_OBJECT_UNLOCK(self);
+  if (!calibration || !detector || calibration->kind != pickdetect::CalibrationKind::Homography)
+    return;
+  for (const pickdetect::Model& model : detector->models()) {
+    if (model.height_mm > 0.0) {
+      GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                          ("The calibration \"%s\" is a plain homography (no camera): model %s's "
+                           "height of %g mm is not accounted for; calibrate with chessboard "
+                           "photos for that",
+                           path.c_str(), model.name.c_str(), model.height_mm),
+                          (nullptr));
+      return;
+    }
+  }
+}
+
 static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
   GstPickDetectPrivate* priv = self->priv;
+
+  if (!load_calibration_file(self))
+    return FALSE;
 
   // A `model` set while this loads is caught by its generation and loaded again.
   for (;;) {
@@ -619,6 +692,7 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
     if (current)
       break;
   }
+  warn_heights_ignored(self);
 
   GST_OBJECT_LOCK(self);
   int threads = priv->threads;
@@ -645,6 +719,7 @@ static gboolean gst_pick_detect_stop(GstBaseTransform* trans) {
   self->priv->active_threads = 1;
   old = std::move(self->priv->detector);
   self->priv->loaded_path.clear();
+  self->priv->config.calibration.reset();
   GST_OBJECT_UNLOCK(self);
   self->priv->format.reset();
   return TRUE; // `old` is released here, outside the lock.
@@ -657,6 +732,21 @@ static gboolean gst_pick_detect_set_info(GstVideoFilter* filter, GstCaps* incaps
   (void)outcaps;
   (void)out_info;
   GstPickDetect* self = GST_PICK_DETECT(filter);
+  GST_OBJECT_LOCK(self);
+  std::shared_ptr<const pickdetect::Calibration> calibration = self->priv->config.calibration;
+  const std::string calibration_path = self->priv->calibration_path;
+  GST_OBJECT_UNLOCK(self);
+  if (calibration && (calibration->image_size.width != GST_VIDEO_INFO_WIDTH(in_info) ||
+                      calibration->image_size.height != GST_VIDEO_INFO_HEIGHT(in_info))) {
+    GST_ELEMENT_ERROR(self, RESOURCE, SETTINGS,
+                      ("The calibration \"%s\" was made for %dx%d frames, these are %dx%d: "
+                       "calibrate at this resolution, or scale the frames before pickdetect",
+                       calibration_path.c_str(), calibration->image_size.width,
+                       calibration->image_size.height, GST_VIDEO_INFO_WIDTH(in_info),
+                       GST_VIDEO_INFO_HEIGHT(in_info)),
+                      (nullptr));
+    return FALSE;
+  }
   // Frames in the works keep the format they started with (they are drained before new caps).
   auto format = std::make_shared<gstpickdetect::FrameFormat>();
   std::string error;
@@ -1023,6 +1113,20 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
           "frame thread beyond the first raises the throughput on several cores and adds one "
           "frame of latency (reported in the latency query). Takes effect at the next start",
           0, 64, DEFAULT_THREADS,
+          static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                   GST_PARAM_MUTABLE_READY)));
+
+  g_object_class_install_property(
+      gobject_class, PROP_CALIBRATION,
+      g_param_spec_string(
+          "calibration", "Calibration",
+          "A calibration file (YAML, written by pickdetect-calibrate): every instance then also "
+          "carries its centre, grasp point, outline and angle in millimetres on the work plane "
+          "(world-x, world-y, world-angle, grasp-world-x, grasp-world-y, world-outline), lens "
+          "distortion corrected and the top face raised by its model's height (model file key "
+          "'height', mm). Frames must have the calibration's size. Unset: pixels only. A file "
+          "that cannot be loaded fails the start. Takes effect at the next start",
+          DEFAULT_CALIBRATION,
           static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
                                    GST_PARAM_MUTABLE_READY)));
 
