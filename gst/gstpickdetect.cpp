@@ -202,6 +202,7 @@ struct GstPickDetectPrivate {
   std::shared_ptr<const gstpickdetect::FrameFormat> format; ///< From the caps, for new frames.
   std::unique_ptr<gstpickdetect::OrderedWorkers> workers;   ///< With more than one frame thread.
   GstFlowReturn drain_ret = GST_FLOW_OK; ///< A failed push while draining, told at the next frame.
+  bool size_error_posted = false;        ///< Caps of the wrong size for the calibration, told once.
 };
 
 struct _GstPickDetect {
@@ -703,6 +704,7 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
   if (threads > 1)
     priv->workers = std::make_unique<gstpickdetect::OrderedWorkers>(threads);
   priv->drain_ret = GST_FLOW_OK;
+  priv->size_error_posted = false;
   GST_OBJECT_LOCK(self);
   priv->active_threads = threads;
   GST_OBJECT_UNLOCK(self);
@@ -738,6 +740,9 @@ static gboolean gst_pick_detect_set_info(GstVideoFilter* filter, GstCaps* incaps
   GST_OBJECT_UNLOCK(self);
   if (calibration && (calibration->image_size.width != GST_VIDEO_INFO_WIDTH(in_info) ||
                       calibration->image_size.height != GST_VIDEO_INFO_HEIGHT(in_info))) {
+    if (self->priv->size_error_posted) // Negotiation retries: the error is posted once.
+      return FALSE;
+    self->priv->size_error_posted = true;
     GST_ELEMENT_ERROR(self, RESOURCE, SETTINGS,
                       ("The calibration \"%s\" was made for %dx%d frames, these are %dx%d: "
                        "calibrate at this resolution, or scale the frames before pickdetect",
