@@ -317,7 +317,9 @@ Calibration calibrate_chessboard(const std::vector<ChessboardView>& views,
   cv::Mat k, d;
   std::vector<cv::Mat> rvecs, tvecs;
   try {
-    c.reprojection_px = cv::calibrateCamera(object_points, image_points, size, k, d, rvecs, tvecs);
+    // k3 stays 0: with boards that do not reach the corners it only fits noise there.
+    c.reprojection_px = cv::calibrateCamera(object_points, image_points, size, k, d, rvecs, tvecs,
+                                            cv::CALIB_FIX_K3);
   } catch (const cv::Exception& e) {
     throw Error(std::string("the calibration failed: ") + e.err);
   }
