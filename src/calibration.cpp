@@ -395,14 +395,30 @@ Calibration calibrate_points(const std::vector<PlanePoint>& points, const cv::Si
 
 PlaneInstance locate_on_plane(const Instance& instance, const Calibration& calibration,
                               double height_mm) {
-  // A short step along the instance's x axis (clockwise on screen) gives its direction on the
-  // plane; short, so that the perspective and the lens bend it as little as possible.
+  // The direction of the model picture's x axis at the centre, through the instance's
+  // homography (model pixels to frame pixels: perspective included), a short step so that the
+  // lens bends it as little as possible; the instance's angle if the homography is singular.
   constexpr double kStepPx = 4.0;
-  const double radians = instance.angle * CV_PI / 180.0;
   const cv::Point2d centre(instance.center);
-  std::vector<cv::Point2d> pixels{
-      centre, centre + kStepPx * cv::Point2d(std::cos(radians), std::sin(radians)),
-      cv::Point2d(instance.grasp)};
+  cv::Point2d ahead;
+  const cv::Matx33d& h = instance.homography;
+  const cv::Vec3d m0 = h.inv() * cv::Vec3d(centre.x, centre.y, 1.0);
+  bool have_direction = false;
+  if (std::abs(cv::determinant(h)) > 1e-12 && std::abs(m0[2]) > 1e-12) {
+    const cv::Vec3d p0 = h * cv::Vec3d(m0[0] / m0[2], m0[1] / m0[2], 1.0);
+    const cv::Vec3d p1 = h * cv::Vec3d(m0[0] / m0[2] + 1.0, m0[1] / m0[2], 1.0);
+    const cv::Point2d d(p1[0] / p1[2] - p0[0] / p0[2], p1[1] / p1[2] - p0[1] / p0[2]);
+    const double n = std::hypot(d.x, d.y);
+    if (std::isfinite(n) && n > 1e-9) {
+      ahead = centre + d * (kStepPx / n);
+      have_direction = true;
+    }
+  }
+  if (!have_direction) {
+    const double radians = instance.angle * CV_PI / 180.0;
+    ahead = centre + kStepPx * cv::Point2d(std::cos(radians), std::sin(radians));
+  }
+  std::vector<cv::Point2d> pixels{centre, ahead, cv::Point2d(instance.grasp)};
   for (const cv::Point2f& p : instance.outline)
     pixels.emplace_back(p);
   const std::vector<cv::Point2d> plane = to_plane_all(calibration, pixels, height_mm);
