@@ -52,19 +52,18 @@ def main():
     broker = subprocess.Popen([broker_bin, "-c", config], stdout=subprocess.DEVNULL,
                               stderr=subprocess.PIPE, text=True)
     subscriber = None
+    lines = []
     try:
         if not wait_for_port(port, broker, 10):
-            sys.exit("the broker did not listen on 127.0.0.1:%d: %s" % (port, broker.stderr.read()
-                                                                       if broker.poll() is not None
-                                                                       else "timeout"))
+            why = broker.stderr.read() if broker.poll() is not None else "timeout"
+            sys.exit("the broker did not listen on 127.0.0.1:%d: %s" % (port, why))
         # -C: leave after that many messages; -W: or after that many seconds. The subscription
         # is made before anything is published (-d prints the SUBACK; stdbuf makes its output
         # line-buffered, else the SUBACK would wait in its stdio buffer until it leaves).
         subscriber = subprocess.Popen(
-            ["stdbuf", "-oL", "mosquitto_sub", "-h", "127.0.0.1", "-p", str(port), "-t", TOPIC, "-C", str(MESSAGES),
-             "-W", "60", "-d"],
+            ["stdbuf", "-oL", "mosquitto_sub", "-h", "127.0.0.1", "-p", str(port), "-t", TOPIC,
+             "-C", str(MESSAGES), "-W", "60", "-d"],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-        lines = []
         while True:  # Debug lines until the SUBACK, then the messages.
             line = subscriber.stdout.readline()
             if not line:
