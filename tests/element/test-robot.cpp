@@ -298,27 +298,39 @@ GST_START_TEST(test_json_lines_match_the_metas) {
 }
 GST_END_TEST;
 
-/// Starts `launch` to PAUSED; the error message posted (empty when it started).
-std::string start_error(const std::string& launch) {
+/// Starts `launch` to PAUSED; the error message posted (empty when it started), and the text
+/// of any warning posted meanwhile in `warning`.
+std::string start_error(const std::string& launch, std::string* warning = nullptr) {
   GstElement* pipeline = gst_parse_launch(launch.c_str(), nullptr);
   fail_unless(pipeline != nullptr);
   gst_element_set_state(pipeline, GST_STATE_PAUSED);
   std::string text;
-  {
-    GstBus* bus = gst_element_get_bus(pipeline);
-    GstMessage* m = gst_bus_timed_pop_filtered(
-        bus, 5 * GST_SECOND,
-        static_cast<GstMessageType>(GST_MESSAGE_ERROR | GST_MESSAGE_ASYNC_DONE));
-    if (m && GST_MESSAGE_TYPE(m) == GST_MESSAGE_ERROR) {
+  GstBus* bus = gst_element_get_bus(pipeline);
+  for (;;) {
+    GstMessage* m = gst_bus_timed_pop_filtered(bus, 5 * GST_SECOND,
+                                               static_cast<GstMessageType>(GST_MESSAGE_ERROR |
+                                                                           GST_MESSAGE_WARNING |
+                                                                           GST_MESSAGE_ASYNC_DONE));
+    if (!m)
+      break;
+    const GstMessageType type = GST_MESSAGE_TYPE(m);
+    if (type == GST_MESSAGE_ERROR || type == GST_MESSAGE_WARNING) {
       GError* error = nullptr;
-      gst_message_parse_error(m, &error, nullptr);
-      text = error->message;
+      if (type == GST_MESSAGE_ERROR)
+        gst_message_parse_error(m, &error, nullptr);
+      else
+        gst_message_parse_warning(m, &error, nullptr);
+      if (type == GST_MESSAGE_ERROR)
+        text = error->message;
+      else if (warning)
+        *warning += error->message;
       g_error_free(error);
     }
-    if (m)
-      gst_message_unref(m);
-    gst_object_unref(bus);
+    gst_message_unref(m);
+    if (type != GST_MESSAGE_WARNING)
+      break;
   }
+  gst_object_unref(bus);
   gst_element_set_state(pipeline, GST_STATE_NULL);
   gst_object_unref(pipeline);
   return text;
@@ -349,9 +361,22 @@ GST_START_TEST(test_bad_calibration_fails_the_start_naming_the_file) {
   fail_unless(e.find("800x600") != std::string::npos && e.find("640x480") != std::string::npos,
               "got: %s", e.c_str());
 
-  // And a good one starts.
-  e = start_error(src + model + "\"" + cell.calibration + "\"" + tail);
+  // And a good one starts, with no warning.
+  std::string warning;
+  e = start_error(src + model + "\"" + cell.calibration + "\"" + tail, &warning);
+  fail_unless(e.empty() && warning.empty(), "got: %s / %s", e.c_str(), warning.c_str());
+
+  // A bare homography cannot raise the plane to the model's height: it starts, and says so.
+  const std::string flat = cell.dir + "/flat.yml";
+  pickdetect::Calibration homography;
+  homography.kind = pickdetect::CalibrationKind::Homography;
+  homography.image_size = {800, 600};
+  pickdetect::save_calibration(homography, flat);
+  e = start_error(src + model + "\"" + flat + "\"" + tail, &warning);
+  g_remove(flat.c_str());
   fail_unless(e.empty(), "got: %s", e.c_str());
+  fail_unless(warning.find("height of 40 mm is not accounted for") != std::string::npos,
+              "warning: %s", warning.c_str());
 }
 GST_END_TEST;
 
