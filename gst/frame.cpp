@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <optional>
 #include <vector>
 
 GST_DEBUG_CATEGORY_EXTERN(gst_pick_detect_debug);
@@ -23,11 +24,15 @@ double ms_since(std::chrono::steady_clock::time_point start) {
       .count();
 }
 
-GValue double_array(const std::vector<cv::Point2f>& points) {
+/// Where each instance lies on the work plane (empty when there is no calibration; an
+/// instance whose pixels do not look onto the plane has none).
+using PlaneInstances = std::vector<std::optional<pickdetect::PlaneInstance>>;
+
+template <typename Point> GValue double_array(const std::vector<Point>& points) {
   GValue array = G_VALUE_INIT;
   g_value_init(&array, GST_TYPE_ARRAY);
-  for (const cv::Point2f& p : points) {
-    for (const float v : {p.x, p.y}) {
+  for (const Point& p : points) {
+    for (const double v : {static_cast<double>(p.x), static_cast<double>(p.y)}) {
       GValue item = G_VALUE_INIT;
       g_value_init(&item, G_TYPE_DOUBLE);
       g_value_set_double(&item, v);
@@ -37,8 +42,10 @@ GValue double_array(const std::vector<cv::Point2f>& points) {
   return array;
 }
 
-/// The "pick-instance" structure of ROI params and bus messages.
-GstStructure* instance_structure(const pickdetect::Instance& instance) {
+/// The "pick-instance" structure of ROI params and bus messages; `plane` adds the world fields.
+GstStructure* instance_structure(const pickdetect::Instance& instance,
+                                 const std::optional<pickdetect::PlaneInstance>& plane,
+                                 double height_mm) {
   GstStructure* s = gst_structure_new(
       "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "center-x",
       G_TYPE_DOUBLE, static_cast<double>(instance.center.x), "center-y", G_TYPE_DOUBLE,
@@ -54,7 +61,42 @@ GstStructure* instance_structure(const pickdetect::Instance& instance) {
   gst_structure_take_value(s, "points", &points);
   GValue outline = double_array(instance.outline);
   gst_structure_take_value(s, "outline", &outline);
+  if (plane) {
+    gst_structure_set(s, "world-x", G_TYPE_DOUBLE, plane->center.x, "world-y", G_TYPE_DOUBLE,
+                      plane->center.y, "world-angle", G_TYPE_DOUBLE, plane->angle, "grasp-world-x",
+                      G_TYPE_DOUBLE, plane->grasp.x, "grasp-world-y", G_TYPE_DOUBLE, plane->grasp.y,
+                      "height", G_TYPE_DOUBLE, height_mm, nullptr);
+    GValue world_outline = double_array(plane->outline);
+    gst_structure_take_value(s, "world-outline", &world_outline);
+  }
   return s;
+}
+
+/// The height of the instance's model above the plane, in millimetres.
+double model_height(const pickdetect::Detector& detector, const pickdetect::Instance& instance) {
+  const std::vector<pickdetect::Model>& models = detector.models();
+  return instance.model >= 0 && static_cast<size_t>(instance.model) < models.size()
+             ? models[static_cast<size_t>(instance.model)].height_mm
+             : 0.0;
+}
+
+PlaneInstances locate_all(GstElement* element, const pickdetect::Detection& detection,
+                          const pickdetect::Detector& detector,
+                          const pickdetect::Calibration* calibration) {
+  PlaneInstances out;
+  if (!calibration)
+    return out;
+  out.reserve(detection.instances.size());
+  for (const pickdetect::Instance& in : detection.instances) {
+    try {
+      out.emplace_back(pickdetect::locate_on_plane(in, *calibration, model_height(detector, in)));
+    } catch (const std::exception& e) {
+      GST_WARNING_OBJECT(element, "instance of %s at (%.1f, %.1f) not placed on the plane: %s",
+                         in.model_name.c_str(), in.center.x, in.center.y, e.what());
+      out.emplace_back(std::nullopt);
+    }
+  }
+  return out;
 }
 
 std::vector<GstPickDetectPoint> to_meta_points(const std::vector<cv::Point2f>& points) {
@@ -65,10 +107,12 @@ std::vector<GstPickDetectPoint> to_meta_points(const std::vector<cv::Point2f>& p
   return out;
 }
 
-void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& instances, int width,
+void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& instances,
+                  const PlaneInstances& planes, const pickdetect::Detector& detector, int width,
                   int height) {
   GstPickDetectMeta* meta = gst_buffer_add_pickdetect_meta(buffer);
-  for (const pickdetect::Instance& in : instances) {
+  for (size_t i = 0; i < instances.size(); i++) {
+    const pickdetect::Instance& in = instances[i];
     std::vector<GstPickDetectPoint> points = to_meta_points(in.points);
     std::vector<GstPickDetectPoint> outline = to_meta_points(in.outline);
     GstPickDetectInstance out{};
@@ -90,6 +134,21 @@ void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& in
     out.grasp_x = in.grasp.x;
     out.grasp_y = in.grasp.y;
     out.grasp_angle = in.grasp_angle;
+    out.height = model_height(detector, in);
+    std::vector<GstPickDetectPoint> world_outline;
+    if (i < planes.size() && planes[i]) {
+      const pickdetect::PlaneInstance& plane = *planes[i];
+      out.calibrated = TRUE;
+      out.world_x = plane.center.x;
+      out.world_y = plane.center.y;
+      out.world_angle = plane.angle;
+      out.grasp_world_x = plane.grasp.x;
+      out.grasp_world_y = plane.grasp.y;
+      for (const cv::Point2d& p : plane.outline)
+        world_outline.push_back(GstPickDetectPoint{p.x, p.y});
+      out.n_world_outline = static_cast<guint>(world_outline.size());
+      out.world_outline = world_outline.empty() ? nullptr : world_outline.data();
+    }
     gst_pickdetect_meta_add_instance(meta, &out);
   }
 
@@ -101,7 +160,8 @@ void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& in
     next_id = std::max(next_id, reinterpret_cast<GstVideoRegionOfInterestMeta*>(m)->id + 1);
   }
 
-  for (const pickdetect::Instance& in : instances) {
+  for (size_t i = 0; i < instances.size(); i++) {
+    const pickdetect::Instance& in = instances[i];
     const std::vector<cv::Point2f>& shape = in.outline.empty() ? in.points : in.outline;
     double x0 = in.center.x, y0 = in.center.y, x1 = in.center.x, y1 = in.center.y;
     for (const cv::Point2f& p : shape) {
@@ -119,13 +179,16 @@ void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& in
         static_cast<guint>(right - left), static_cast<guint>(bottom - top));
     roi->id = next_id++;
     roi->parent_id = -1;
-    gst_video_region_of_interest_meta_add_param(roi, instance_structure(in));
+    gst_video_region_of_interest_meta_add_param(
+        roi, instance_structure(in, i < planes.size() ? planes[i] : std::nullopt,
+                                model_height(detector, in)));
   }
 }
 
 GstStructure* message_structure(GstBuffer* buffer, const GstSegment& segment,
-                                const pickdetect::Detection& detection, double metadata_ms,
-                                double overlay_ms) {
+                                const pickdetect::Detection& detection,
+                                const PlaneInstances& planes, const pickdetect::Detector& detector,
+                                double metadata_ms, double overlay_ms) {
   const GstClockTime ts = GST_BUFFER_PTS(buffer);
   GstClockTime running_time = GST_CLOCK_TIME_NONE, stream_time = GST_CLOCK_TIME_NONE;
   if (segment.format == GST_FORMAT_TIME) {
@@ -135,10 +198,12 @@ GstStructure* message_structure(GstBuffer* buffer, const GstSegment& segment,
 
   GValue list = G_VALUE_INIT;
   g_value_init(&list, GST_TYPE_LIST);
-  for (const pickdetect::Instance& in : detection.instances) {
+  for (size_t i = 0; i < detection.instances.size(); i++) {
+    const pickdetect::Instance& in = detection.instances[i];
     GValue item = G_VALUE_INIT;
     g_value_init(&item, GST_TYPE_STRUCTURE);
-    g_value_take_boxed(&item, instance_structure(in));
+    g_value_take_boxed(&item, instance_structure(in, i < planes.size() ? planes[i] : std::nullopt,
+                                                 model_height(detector, in)));
     gst_value_list_append_and_take_value(&list, &item);
   }
   GstStructure* s =
@@ -289,11 +354,14 @@ GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameF
   }
   try {
     const auto attaching = std::chrono::steady_clock::now();
-    attach_metas(buffer, detection.instances, GST_VIDEO_INFO_WIDTH(&format.info()),
-                 GST_VIDEO_INFO_HEIGHT(&format.info()));
+    const PlaneInstances planes =
+        locate_all(element, detection, detector, config.calibration.get());
+    attach_metas(buffer, detection.instances, planes, detector,
+                 GST_VIDEO_INFO_WIDTH(&format.info()), GST_VIDEO_INFO_HEIGHT(&format.info()));
     const double metadata_ms = ms_since(attaching);
     if (config.post_messages && message)
-      *message = message_structure(buffer, segment, detection, metadata_ms, overlay_ms);
+      *message =
+          message_structure(buffer, segment, detection, planes, detector, metadata_ms, overlay_ms);
   } catch (const std::exception& e) {
     GST_ELEMENT_ERROR(element, CORE, FAILED, ("Could not attach the instances: %s", e.what()),
                       (nullptr));

@@ -6,6 +6,7 @@
 
 #include "overlay.hpp"
 
+#include <pickdetect/calibration.hpp>
 #include <pickdetect/detector.hpp>
 
 #include <gst/gst.h>
@@ -13,6 +14,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <memory>
 #include <string>
 
 namespace gstpickdetect {
@@ -22,6 +24,8 @@ struct FrameConfig {
   pickdetect::Settings settings;
   bool draw = false;
   bool post_messages = true;
+  /// From the `calibration` property: instances are also placed on the work plane; null: not.
+  std::shared_ptr<const pickdetect::Calibration> calibration;
 };
 
 /// What the negotiated caps decide about working on a frame; set once per caps.

@@ -19,6 +19,8 @@
  * With #GstPickDetect:post-messages an element message "pickdetect" per frame lists those
  * structures and the time of each stage. The metas of the input buffer are kept; on a copy, metas
  * tagged only with video, size, orientation or colorspace tags (or untagged) are copied.
+ * With #GstPickDetect:calibration (a file written by pickdetect-calibrate) every instance is
+ * also placed on the work plane, in millimetres (docs/robot-output.md).
  *
  * ## Example launch line
  * |[
@@ -35,6 +37,7 @@
 #include "ordered-workers.hpp"
 
 #include <gst/pickdetect/pickdetect-meta.h>
+#include <pickdetect/calibration.hpp>
 #include <pickdetect/detector.hpp>
 #include <pickdetect/error.hpp>
 #include <pickdetect/model.hpp>
@@ -77,6 +80,7 @@ enum {
   PROP_DRAW,
   PROP_POST_MESSAGES,
   PROP_THREADS,
+  PROP_CALIBRATION,
 };
 
 #define DEFAULT_MODEL nullptr
@@ -93,6 +97,7 @@ constexpr gboolean DEFAULT_REFINE = TRUE;
 constexpr gboolean DEFAULT_DRAW = FALSE;
 constexpr gboolean DEFAULT_POST_MESSAGES = TRUE;
 constexpr int DEFAULT_THREADS = 1;
+#define DEFAULT_CALIBRATION nullptr
 
 // The element's defaults are the core's.
 static_assert(pickdetect::Settings{}.method == pickdetect::Method::Voting);
@@ -126,10 +131,12 @@ struct GstPickDetectPrivate {
   std::shared_ptr<const pickdetect::Detector> detector;
   int threads = DEFAULT_THREADS; ///< The `threads` property.
   int active_threads = 1;        ///< Frame threads since start (`threads` resolved).
+  std::string calibration_path;  ///< The `calibration` property (loaded at start).
   // ---- streaming thread (and state changes while it is stopped) only ----
   std::shared_ptr<const gstpickdetect::FrameFormat> format; ///< From the caps, for new frames.
   std::unique_ptr<gstpickdetect::OrderedWorkers> workers;   ///< With more than one frame thread.
   GstFlowReturn drain_ret = GST_FLOW_OK; ///< A failed push while draining, told at the next frame.
+  bool size_error_posted = false;        ///< Caps of the wrong size for the calibration, told once.
 };
 
 struct _GstPickDetect {
@@ -449,6 +456,11 @@ static void gst_pick_detect_set_property(GObject* object, guint prop_id, const G
   case PROP_THREADS:
     priv->threads = g_value_get_int(value);
     break;
+  case PROP_CALIBRATION: {
+    const gchar* path = g_value_get_string(value);
+    priv->calibration_path = path ? path : "";
+    break;
+  }
   default:
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
     break;
@@ -508,6 +520,10 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
   case PROP_THREADS:
     g_value_set_int(value, priv->threads);
     break;
+  case PROP_CALIBRATION:
+    g_value_set_string(value,
+                       priv->calibration_path.empty() ? nullptr : priv->calibration_path.c_str());
+    break;
   default:
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
     break;
@@ -518,9 +534,62 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
 /* ------------------------------------------------------------------------------------------- */
 /* Start / stop / caps                                                                         */
 
+/// Loads the `calibration` file into the frame settings (none when the property is unset).
+/// False, with an error posted naming the file and the reason, when it cannot be loaded.
+static bool load_calibration_file(GstPickDetect* self) {
+  GstPickDetectPrivate* priv = self->priv;
+  GST_OBJECT_LOCK(self);
+  const std::string path = priv->calibration_path;
+  GST_OBJECT_UNLOCK(self);
+  std::shared_ptr<const pickdetect::Calibration> calibration;
+  if (!path.empty()) {
+    GST_INFO_OBJECT(self, "loading calibration %s", path.c_str());
+    try {
+      calibration =
+          std::make_shared<const pickdetect::Calibration>(pickdetect::load_calibration(path));
+    } catch (const std::exception& e) {
+      const std::string message = std::string("Could not load the calibration: ") + e.what();
+      GST_ERROR_OBJECT(self, "%s", message.c_str());
+      post_resource_message(self, GST_MESSAGE_ERROR, file_error_code(path), message,
+                            "calibration=" + path);
+      return false;
+    }
+  }
+  GST_OBJECT_LOCK(self);
+  priv->config.calibration = calibration;
+  GST_OBJECT_UNLOCK(self);
+  return true;
+}
+
+/// A homography calibration knows no camera, so it cannot raise the plane to a model's height:
+/// says so, once per start, when a model has one.
+static void warn_heights_ignored(GstPickDetect* self) {
+  GST_OBJECT_LOCK(self);
+  std::shared_ptr<const pickdetect::Calibration> calibration = self->priv->config.calibration;
+  std::shared_ptr<const pickdetect::Detector> detector = self->priv->detector;
+  const std::string path = self->priv->calibration_path;
+  GST_OBJECT_UNLOCK(self);
+  if (!calibration || !detector || calibration->kind != pickdetect::CalibrationKind::Homography)
+    return;
+  for (const pickdetect::Model& model : detector->models()) {
+    if (model.height_mm > 0.0) {
+      GST_ELEMENT_WARNING(self, RESOURCE, SETTINGS,
+                          ("The calibration \"%s\" is a plain homography (no camera): model %s's "
+                           "height of %g mm is not accounted for; calibrate with chessboard "
+                           "photos for that",
+                           path.c_str(), model.name.c_str(), model.height_mm),
+                          (nullptr));
+      return;
+    }
+  }
+}
+
 static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
   GstPickDetectPrivate* priv = self->priv;
+
+  if (!load_calibration_file(self))
+    return FALSE;
 
   // A `model` set while this loads is caught by its generation and loaded again.
   for (;;) {
@@ -558,6 +627,7 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
     if (current)
       break;
   }
+  warn_heights_ignored(self);
 
   GST_OBJECT_LOCK(self);
   int threads = priv->threads;
@@ -568,6 +638,7 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
   if (threads > 1)
     priv->workers = std::make_unique<gstpickdetect::OrderedWorkers>(threads);
   priv->drain_ret = GST_FLOW_OK;
+  priv->size_error_posted = false;
   GST_OBJECT_LOCK(self);
   priv->active_threads = threads;
   GST_OBJECT_UNLOCK(self);
@@ -584,6 +655,7 @@ static gboolean gst_pick_detect_stop(GstBaseTransform* trans) {
   self->priv->active_threads = 1;
   old = std::move(self->priv->detector);
   self->priv->loaded_path.clear();
+  self->priv->config.calibration.reset();
   GST_OBJECT_UNLOCK(self);
   self->priv->format.reset();
   return TRUE; // `old` is released here, outside the lock.
@@ -596,6 +668,24 @@ static gboolean gst_pick_detect_set_info(GstVideoFilter* filter, GstCaps* incaps
   (void)outcaps;
   (void)out_info;
   GstPickDetect* self = GST_PICK_DETECT(filter);
+  GST_OBJECT_LOCK(self);
+  std::shared_ptr<const pickdetect::Calibration> calibration = self->priv->config.calibration;
+  const std::string calibration_path = self->priv->calibration_path;
+  GST_OBJECT_UNLOCK(self);
+  if (calibration && (calibration->image_size.width != GST_VIDEO_INFO_WIDTH(in_info) ||
+                      calibration->image_size.height != GST_VIDEO_INFO_HEIGHT(in_info))) {
+    if (self->priv->size_error_posted) // Negotiation retries: the error is posted once.
+      return FALSE;
+    self->priv->size_error_posted = true;
+    GST_ELEMENT_ERROR(self, RESOURCE, SETTINGS,
+                      ("The calibration \"%s\" was made for %dx%d frames, these are %dx%d: "
+                       "calibrate at this resolution, or scale the frames before pickdetect",
+                       calibration_path.c_str(), calibration->image_size.width,
+                       calibration->image_size.height, GST_VIDEO_INFO_WIDTH(in_info),
+                       GST_VIDEO_INFO_HEIGHT(in_info)),
+                      (nullptr));
+    return FALSE;
+  }
   // Frames in the works keep the format they started with (they are drained before new caps).
   auto format = std::make_shared<gstpickdetect::FrameFormat>();
   std::string error;
@@ -962,6 +1052,20 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
           "frame thread beyond the first raises the throughput on several cores and adds one "
           "frame of latency (reported in the latency query). Takes effect at the next start",
           0, 64, DEFAULT_THREADS,
+          static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
+                                   GST_PARAM_MUTABLE_READY)));
+
+  g_object_class_install_property(
+      gobject_class, PROP_CALIBRATION,
+      g_param_spec_string(
+          "calibration", "Calibration",
+          "A calibration file (YAML, written by pickdetect-calibrate): every instance then also "
+          "carries its centre, grasp point, outline and angle in millimetres on the work plane "
+          "(world-x, world-y, world-angle, grasp-world-x, grasp-world-y, world-outline), lens "
+          "distortion corrected and the top face raised by its model's height (model file key "
+          "'height', mm). Frames must have the calibration's size. Unset: pixels only. A file "
+          "that cannot be loaded fails the start. Takes effect at the next start",
+          DEFAULT_CALIBRATION,
           static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
                                    GST_PARAM_MUTABLE_READY)));
 

@@ -13,6 +13,7 @@ static void instance_clear(GstPickDetectInstance* instance) {
   g_free(instance->model_name);
   g_free(instance->points);
   g_free(instance->outline);
+  g_free(instance->world_outline);
   memset(instance, 0, sizeof(*instance));
 }
 
@@ -23,6 +24,12 @@ static void instance_copy(GstPickDetectInstance* dest, const GstPickDetectInstan
       src->n_points ? g_memdup2(src->points, sizeof(GstPickDetectPoint) * src->n_points) : NULL;
   dest->outline =
       src->n_outline ? g_memdup2(src->outline, sizeof(GstPickDetectPoint) * src->n_outline) : NULL;
+  dest->world_outline =
+      src->n_world_outline && src->world_outline
+          ? g_memdup2(src->world_outline, sizeof(GstPickDetectPoint) * src->n_world_outline)
+          : NULL;
+  if (!dest->world_outline)
+    dest->n_world_outline = 0;
   if (!dest->points)
     dest->n_points = 0;
   if (!dest->outline)
@@ -42,6 +49,7 @@ static gdouble stretch_angle(gdouble angle, gdouble sx, gdouble sy) {
   return out;
 }
 
+/* Pixel positions follow the frame; those on the plane (world_*) stay as they are. */
 static void instance_scale(GstPickDetectInstance* instance, gdouble sx, gdouble sy) {
   instance->center_x *= sx;
   instance->center_y *= sy;

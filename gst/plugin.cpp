@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
-// The pickdetect plugin: the pickdetect element.
+// The pickdetect plugin: the pickdetect element and pickdetectjson, its JSON lines.
 #include "gstpickdetect.h"
+#include "gstpickdetectjson.h"
 
 static gboolean plugin_init(GstPlugin* plugin) {
-  return GST_ELEMENT_REGISTER(pickdetect, plugin);
+  gboolean ok = GST_ELEMENT_REGISTER(pickdetect, plugin);
+  ok &= GST_ELEMENT_REGISTER(pickdetectjson, plugin);
+  return ok;
 }
 
 GST_PLUGIN_DEFINE(GST_VERSION_MAJOR, GST_VERSION_MINOR, pickdetect,

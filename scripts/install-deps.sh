@@ -10,6 +10,7 @@ packages=(
   libgtest-dev opencv-doc
   python3 python3-gi python3-gst-1.0 gir1.2-gst-plugins-base-1.0
   valgrind clang libclang-rt-14-dev  # robustness: valgrind tests, scripts/fuzz.sh (libFuzzer)
+  mosquitto mosquitto-clients        # pipelines/publish-mqtt.sh and its test (a broker on 127.0.0.1)
 )
 
 missing=()

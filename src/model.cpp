@@ -313,6 +313,14 @@ Model load_model(const std::string& path) {
         throw Error(origin + ": 'grasp_point' must be the index of a principal point");
       model.grasp_point = static_cast<int>(root["grasp_point"]);
     }
+    if (!root["height"].empty()) {
+      const cv::FileNode height = root["height"];
+      if (!height.isReal() && !height.isInt())
+        throw Error(origin + ": 'height' must be a number (millimetres above the work plane)");
+      model.height_mm = static_cast<double>(height);
+      if (!std::isfinite(model.height_mm) || model.height_mm < 0.0)
+        throw Error(origin + ": 'height' must be a finite number of millimetres, 0 or more");
+    }
     check_geometry(model, origin);
 
     if (!root["keypoints"].empty() && !root["descriptors"].empty()) {
@@ -379,6 +387,8 @@ void save_model(const Model& model, const std::string& path, bool cache_features
   write_points("principal_points", model.principal_points);
   write_points("outline", model.outline);
   store << "grasp_point" << model.grasp_point;
+  if (model.height_mm > 0.0)
+    store << "height" << model.height_mm;
   if (cache_features && !model.sift.keypoints.empty()) {
     cv::write(store, "keypoints", model.sift.keypoints);
     store << "descriptors" << model.sift.descriptors;

@@ -22,8 +22,11 @@ struct Model {
   std::vector<cv::Point2f> principal_points;
   std::vector<cv::Point2f> outline; ///< Outline polygon in model pixels.
   int grasp_point = 0;              ///< Index into principal_points of the grasp point.
-  Features sift;                    ///< SIFT features of the picture (the paper's).
-  Features orb;                     ///< ORB features of the picture (the fast configuration).
+  /// Millimetres from the work plane up to the object's top face (the model file's `height`),
+  /// for positions on the plane (calibration.hpp); 0 = flat on the plane.
+  double height_mm = 0.0;
+  Features sift; ///< SIFT features of the picture (the paper's).
+  Features orb;  ///< ORB features of the picture (the fast configuration).
 
   const Features& features(FeatureKind kind) const { return kind == FeatureKind::Orb ? orb : sift; }
 };

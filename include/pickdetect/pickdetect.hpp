@@ -2,6 +2,7 @@
 // The whole public API of the detection core.
 #pragma once
 
+#include <pickdetect/calibration.hpp>
 #include <pickdetect/detector.hpp>
 #include <pickdetect/error.hpp>
 #include <pickdetect/features.hpp>

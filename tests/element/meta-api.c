@@ -49,9 +49,21 @@ int main(int argc, char** argv) {
   instance.grasp_x = 100.0;
   instance.grasp_y = 50.0;
   instance.grasp_angle = 30.0;
+  GstPickDetectPoint world_outline[4] = {{-10.0, 5.0}, {50.0, 5.0}, {50.0, 45.0}, {-10.0, 45.0}};
+  instance.calibrated = TRUE;
+  instance.world_x = 20.0;
+  instance.world_y = 25.0;
+  instance.world_angle = 300.0;
+  instance.grasp_world_x = 21.0;
+  instance.grasp_world_y = 26.0;
+  instance.n_world_outline = 4;
+  instance.world_outline = world_outline;
+  instance.height = 35.0;
   const GstPickDetectInstance* added = gst_pickdetect_meta_add_instance(meta, &instance);
   CHECK(added != NULL && added->points != points && added->model_name != instance.model_name);
+  CHECK(added->world_outline != world_outline && added->world_outline[1].x == 50.0);
   points[0].x = -1.0; /* The meta holds its own copy. */
+  world_outline[1].x = -1.0;
 
   CHECK(gst_buffer_get_pickdetect_meta(buffer) == meta);
   CHECK(gst_pickdetect_meta_get_n_instances(meta) == 1);
@@ -77,6 +89,9 @@ int main(int argc, char** argv) {
   CHECK(copied->instances[0].points != got->points);
   CHECK(copied->instances[0].outline[2].x == 130.0);
   CHECK(copied->instances[0].covered && !copied->instances[0].pickable);
+  CHECK(copied->instances[0].world_outline != got->world_outline);
+  CHECK(copied->instances[0].n_world_outline == 4 &&
+        copied->instances[0].world_outline[1].x == 50.0);
 
   /* The videoscale transform: 640x480 -> 320x240 halves everything. */
   GstVideoInfo in_info, out_info;
@@ -94,6 +109,10 @@ int main(int argc, char** argv) {
   CHECK(fabs(h->scale - 0.4) < 1e-12 && h->angle == 30.0);
   /* Occlusion does not change with the frame's size. */
   CHECK(h->covered && !h->pickable && h->pick_order == 0 && h->visibility == 0.75);
+  /* Nor do positions on the work plane. */
+  CHECK(h->calibrated && h->world_x == 20.0 && h->world_y == 25.0 && h->world_angle == 300.0);
+  CHECK(h->grasp_world_x == 21.0 && h->grasp_world_y == 26.0 && h->height == 35.0);
+  CHECK(h->n_world_outline == 4 && h->world_outline[2].x == 50.0 && h->world_outline[2].y == 45.0);
 
   gst_buffer_unref(scaled);
   gst_buffer_unref(copy);

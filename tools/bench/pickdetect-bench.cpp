@@ -12,6 +12,9 @@
 //   pickdetect-bench              full run (a few minutes on two cores)
 //   pickdetect-bench --quick      fewer frames and configurations (the meson benchmark)
 //   pickdetect-bench --json       the same figures as JSON
+//   pickdetect-bench --json-element   only the pickdetectjson element: its time per frame with
+//                                 30 calibrated instances in the meta (appsrc ! pickdetectjson !
+//                                 fakesink, pad probes around it)
 //
 // Frames are GRAY8: OpenCV's box.png pasted N times at seeded random poses (overlaps allowed) on
 // noise, built in-process with tests/common/scene.hpp. The first frame of every run warms up
@@ -24,6 +27,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <gst/app/gstappsrc.h>
+#include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/gst.h>
 #include <gst/video/video.h>
 
@@ -57,6 +61,7 @@ struct Options {
   gboolean quick = FALSE;
   gboolean json = FALSE;
   gboolean fast_only = FALSE;
+  gboolean json_element = FALSE;
   gint frames = 0; ///< Counted frames per run; 0 = 15 (4 with --quick).
   gchar* data = nullptr;
   ~Options() { g_free(data); }
@@ -338,6 +343,137 @@ void use_build_tree_plugin() {
 #endif
 }
 
+// ---- the JSON element ----------------------------------------------------------------------
+
+/// A buffer whose meta holds `count` instances as pickdetect writes them with a calibration:
+/// five principal points, a four-corner outline in pixels and in millimetres, a long model name.
+GstBuffer* annotated_buffer(int count, GstClockTime pts, cv::RNG& rng) {
+  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, 1, nullptr);
+  GST_BUFFER_PTS(buffer) = pts;
+  GST_BUFFER_DURATION(buffer) = GST_SECOND / 10;
+  GstPickDetectMeta* meta = gst_buffer_add_pickdetect_meta(buffer);
+  for (int i = 0; i < count; i++) {
+    GstPickDetectPoint points[5], outline[4], world[4];
+    const double x = rng.uniform(50.0, 1230.0), y = rng.uniform(50.0, 910.0);
+    points[0] = {x, y};
+    for (int k = 0; k < 4; k++) {
+      outline[k] = {x + rng.uniform(-80.0, 80.0), y + rng.uniform(-60.0, 60.0)};
+      points[k + 1] = outline[k];
+      world[k] = {outline[k].x * 0.93 - 512.25, outline[k].y * 0.91 - 384.5};
+    }
+    GstPickDetectInstance in{};
+    in.model_name = const_cast<gchar*>("cookies-assorted-500g");
+    in.center_x = x;
+    in.center_y = y;
+    in.angle = rng.uniform(0.0, 360.0);
+    in.scale = rng.uniform(0.4, 0.6);
+    in.score = rng.uniform(0.5, 1.0);
+    in.matches = rng.uniform(10, 200);
+    in.n_points = 5;
+    in.points = points;
+    in.n_outline = 4;
+    in.outline = outline;
+    in.visibility = rng.uniform(0.5, 1.0);
+    in.covered = i % 3 == 0;
+    in.pickable = !in.covered;
+    in.pick_order = in.pickable ? i + 1 : 0;
+    in.grasp_x = x;
+    in.grasp_y = y;
+    in.grasp_angle = in.angle;
+    in.calibrated = TRUE;
+    in.world_x = x * 0.93 - 512.25;
+    in.world_y = y * 0.91 - 384.5;
+    in.world_angle = rng.uniform(0.0, 360.0);
+    in.grasp_world_x = in.world_x;
+    in.grasp_world_y = in.world_y;
+    in.n_world_outline = 4;
+    in.world_outline = world;
+    in.height = 40.0;
+    gst_pickdetect_meta_add_instance(meta, &in);
+  }
+  return buffer;
+}
+
+struct JsonTiming {
+  std::mutex lock;
+  Clock::time_point in;
+  std::vector<double> ms;
+  size_t bytes = 0;
+};
+
+/// pickdetectjson alone, `frames` frames of `count` instances: its time per frame (from its
+/// sink pad to its src pad) and the size of a line.
+int json_element_bench(int count, int frames, bool json) {
+  GError* error = nullptr;
+  GstElement* pipeline = gst_parse_launch(
+      "appsrc name=src format=time caps=video/x-raw,format=GRAY8,width=1280,height=960,"
+      "framerate=10/1 ! pickdetectjson name=json ! fakesink sync=false",
+      &error);
+  if (!pipeline)
+    die(std::string("cannot build the pipeline: ") + (error ? error->message : "?"));
+  GstElement* src = gst_bin_get_by_name(GST_BIN(pipeline), "src");
+  GstElement* element = gst_bin_get_by_name(GST_BIN(pipeline), "json");
+  JsonTiming timing;
+  GstPad* sink_pad = gst_element_get_static_pad(element, "sink");
+  GstPad* src_pad = gst_element_get_static_pad(element, "src");
+  gst_pad_add_probe(
+      sink_pad, GST_PAD_PROBE_TYPE_BUFFER,
+      [](GstPad*, GstPadProbeInfo*, gpointer data) {
+        auto* t = static_cast<JsonTiming*>(data);
+        std::lock_guard<std::mutex> guard(t->lock);
+        t->in = Clock::now();
+        return GST_PAD_PROBE_OK;
+      },
+      &timing, nullptr);
+  gst_pad_add_probe(
+      src_pad, GST_PAD_PROBE_TYPE_BUFFER,
+      [](GstPad*, GstPadProbeInfo* info, gpointer data) {
+        auto* t = static_cast<JsonTiming*>(data);
+        std::lock_guard<std::mutex> guard(t->lock);
+        t->ms.push_back(ms_between(t->in, Clock::now()));
+        t->bytes = gst_buffer_get_size(GST_PAD_PROBE_INFO_BUFFER(info));
+        return GST_PAD_PROBE_OK;
+      },
+      &timing, nullptr);
+  gst_object_unref(sink_pad);
+  gst_object_unref(src_pad);
+  gst_element_set_state(pipeline, GST_STATE_PLAYING);
+  cv::RNG rng(19);
+  for (int f = 0; f < frames + 1; f++) // The first frame warms up.
+    gst_app_src_push_buffer(
+        GST_APP_SRC(src),
+        annotated_buffer(count, static_cast<GstClockTime>(f) * GST_SECOND / 10, rng));
+  gst_app_src_end_of_stream(GST_APP_SRC(src));
+  GstBus* bus = gst_element_get_bus(pipeline);
+  GstMessage* m = gst_bus_timed_pop_filtered(
+      bus, 60 * GST_SECOND, static_cast<GstMessageType>(GST_MESSAGE_EOS | GST_MESSAGE_ERROR));
+  const bool ok = m && GST_MESSAGE_TYPE(m) == GST_MESSAGE_EOS;
+  if (m)
+    gst_message_unref(m);
+  gst_object_unref(bus);
+  gst_element_set_state(pipeline, GST_STATE_NULL);
+  gst_object_unref(src);
+  gst_object_unref(element);
+  gst_object_unref(pipeline);
+  if (!ok || timing.ms.size() != static_cast<size_t>(frames + 1))
+    die("the pickdetectjson run did not end cleanly");
+  timing.ms.erase(timing.ms.begin());
+  const Stats st = stats(timing.ms);
+  double mean = 0;
+  for (double v : timing.ms)
+    mean += v / static_cast<double>(timing.ms.size());
+  if (json) {
+    std::printf("{\"json_element\": {\"instances\": %d, \"frames\": %d, \"ms\": {\"median\": "
+                "%.4f, \"p10\": %.4f, \"p90\": %.4f, \"mean\": %.4f}, \"line_bytes\": %zu}}\n",
+                count, frames, st.median, st.p10, st.p90, mean, timing.bytes);
+  } else {
+    std::printf("pickdetectjson, %d calibrated instances per frame, %d frames: %.3f ms per frame "
+                "(median; 10th-90th percentile %.3f-%.3f, mean %.3f), %zu bytes a line\n",
+                count, frames, st.median, st.p10, st.p90, mean, timing.bytes);
+  }
+  return 0;
+}
+
 // ---- output --------------------------------------------------------------------------------
 
 std::string spread(const Stats& s) {
@@ -363,6 +499,8 @@ int run(int argc, char** argv) {
       {"quick", 'q', 0, G_OPTION_ARG_NONE, &o.quick,
        "Fewer frames and configurations (a smoke run: the meson benchmark)", nullptr},
       {"json", 'j', 0, G_OPTION_ARG_NONE, &o.json, "Print the figures as JSON", nullptr},
+      {"json-element", 0, 0, G_OPTION_ARG_NONE, &o.json_element,
+       "Only the pickdetectjson element's time per frame with 30 instances", nullptr},
       {"fast-only", 0, 0, G_OPTION_ARG_NONE, &o.fast_only,
        "Only the fast configurations at 640x480 with 10 boxes", nullptr},
       {"frames", 'n', 0, G_OPTION_ARG_INT, &o.frames,
@@ -382,6 +520,8 @@ int run(int argc, char** argv) {
     g_clear_error(&error);
     return 2;
   }
+  if (o.json_element)
+    return json_element_bench(30, o.frames > 0 ? o.frames : 500, o.json);
   const int n = o.frames > 0 ? o.frames : (o.quick ? 4 : 15);
   const std::string model = std::string(o.data ? o.data : PICKDETECT_BENCH_DATA_DIR) + "/box.png";
   const cv::Mat box = cv::imread(model, cv::IMREAD_GRAYSCALE);

@@ -62,8 +62,21 @@ typedef struct {
  * @grasp_x: grasp point column in pixels
  * @grasp_y: grasp point row in pixels
  * @grasp_angle: gripper angle in degrees
+ * @calibrated: %TRUE when the element had a calibration: the world fields below are then set
+ *   (otherwise they are all 0 and @world_outline is %NULL)
+ * @world_x: centre on the work plane, x in millimetres (plane axes: docs/robot-output.md)
+ * @world_y: centre on the work plane, y in millimetres
+ * @world_angle: angle on the plane in degrees in [0, 360), from its x axis towards its y axis
+ * @grasp_world_x: grasp point on the plane, x in millimetres
+ * @grasp_world_y: grasp point on the plane, y in millimetres
+ * @n_world_outline: number of vertices of @world_outline (@n_outline when calibrated, else 0)
+ * @world_outline: (array length=n_world_outline): the outline on the plane, in millimetres
+ * @height: height of the instance's top face above the plane in millimetres (its model's)
  *
- * One object instance. Inside a meta every array belongs to the meta.
+ * One object instance. Inside a meta every array belongs to the meta. The world fields (on the
+ * work plane, in millimetres, lens distortion and the model's height accounted for) come after
+ * the pixel ones, so that code built against the earlier struct reads the same fields. Plane
+ * positions do not change when the frame is scaled.
  */
 typedef struct {
   gchar* model_name;
@@ -84,6 +97,15 @@ typedef struct {
   gdouble grasp_x;
   gdouble grasp_y;
   gdouble grasp_angle;
+  gboolean calibrated;
+  gdouble world_x;
+  gdouble world_y;
+  gdouble world_angle;
+  gdouble grasp_world_x;
+  gdouble grasp_world_y;
+  guint n_world_outline;
+  GstPickDetectPoint* world_outline;
+  gdouble height;
 } GstPickDetectInstance;
 
 typedef struct _GstPickDetectMeta GstPickDetectMeta;
