@@ -26,6 +26,23 @@ constexpr int kMaxNeighbours = 16;
 /// Ambiguity::Share: a model's nearest descriptor within 1 / kNearlyAsGood of the nearest of
 /// all fits about as well as the best.
 constexpr float kNearlyAsGood = 0.9f;
+/// Repeated designs: two keypoints of one model picture are copies of one printed part when
+/// their descriptors lie within this distance (L2 for SIFT, whose descriptors OpenCV scales to
+/// a norm of 512; Hamming bits for ORB's 256)...
+constexpr float kRepeatSiftDistance = 100.f;
+constexpr float kRepeatOrbDistance = 20.f;
+/// ...and their positions at least this many keypoint sizes (and kMinRepeatGapPx) apart, so that
+/// two keypoints of one spot at other orientations are not taken for copies.
+constexpr float kRepeatGapSizes = 2.f;
+constexpr float kMinRepeatGapPx = 8.f;
+/// Copies searched per model keypoint (a bundle of up to this many identical packs).
+constexpr int kRepeatNeighbours = 12;
+
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[i] != i)
+    i = parent[i] = parent[parent[i]];
+  return i;
+}
 
 std::mutex& flann_build_lock() {
   static std::mutex lock;
@@ -50,6 +67,64 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
     cvflann::seed_random(kKdSeed);
     index_ = std::make_shared<cv::flann::Index>(
         descriptors_, cv::flann::KDTreeIndexParams(kKdTrees), cvflann::FLANN_DIST_L2);
+  }
+  find_repeats(models);
+}
+
+void Matcher::find_repeats(const std::vector<Model>& models) {
+  const int n = descriptors_.rows;
+  std::vector<int> parent(n);
+  for (int i = 0; i < n; ++i)
+    parent[i] = i;
+  if (n >= 2) {
+    // The picture matched against itself, exhaustively: the groups must not depend on the
+    // kd-tree's approximations.
+    const int k = std::min(n, kRepeatNeighbours + 1);
+    cv::Mat indices, distances;
+    nearest(descriptors_, k, Search::BruteForce, indices, distances);
+    const float limit = kind_ == FeatureKind::Orb ? kRepeatOrbDistance : kRepeatSiftDistance;
+    for (int i = 0; i < n; ++i) {
+      const int m = owner_[i];
+      const cv::KeyPoint& a = models[m].features(kind_).keypoints[i - offset_[m]];
+      for (int j = 0; j < k; ++j) {
+        const int other = indices.at<int>(i, j);
+        if (other < 0 || other == i || owner_[other] != m || distances.at<float>(i, j) > limit)
+          continue;
+        const cv::KeyPoint& b = models[m].features(kind_).keypoints[other - offset_[m]];
+        const float gap = std::max(kMinRepeatGapPx, kRepeatGapSizes * std::max(a.size, b.size));
+        const cv::Point2f d = a.pt - b.pt;
+        if (d.dot(d) < gap * gap)
+          continue;
+        parent[find_root(parent, i)] = find_root(parent, other);
+      }
+    }
+  }
+  group_.resize(n);
+  std::vector<std::vector<int>> members(n);
+  for (int i = 0; i < n; ++i) {
+    group_[i] = find_root(parent, i);
+    members[group_[i]].push_back(i);
+  }
+  copies_.assign(n, {});
+  largest_group_ = 1;
+  for (int i = 0; i < n; ++i)
+    if (members[group_[i]].size() > 1) {
+      copies_[i] = members[group_[i]];
+      largest_group_ = std::max(largest_group_, static_cast<int>(copies_[i].size()));
+    }
+}
+
+void Matcher::push_match(std::vector<Match>& matches, int row, int scene_point, float distance,
+                         float ratio, bool shared) const {
+  // A repeated part could be any of its copies: one match (one vote) for each.
+  if (copies_[row].empty()) {
+    matches.push_back(make_match(row, scene_point, distance, ratio));
+    matches.back().shared = shared;
+    return;
+  }
+  for (int copy : copies_[row]) {
+    matches.push_back(make_match(copy, scene_point, distance, ratio));
+    matches.back().shared = shared;
   }
 }
 
@@ -91,9 +166,12 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
   // Sharing needs a few neighbours per model (each model's nearest, and the nearest that is
   // none of the look-alikes'); the plain test needs two.
   const int n_models = static_cast<int>(offset_.size());
-  const int k = ambiguity == Ambiguity::Share
-                    ? std::min(descriptors_.rows, std::clamp(2 * n_models, 2, kMaxNeighbours))
-                    : 2;
+  // Copies of a repeated part are no rivals of each other: the ratio test's second neighbour is
+  // searched beyond them.
+  const int k = std::min(descriptors_.rows,
+                         ambiguity == Ambiguity::Share
+                             ? std::clamp(2 * n_models, 2, kMaxNeighbours) + largest_group_ - 1
+                             : 1 + largest_group_);
   cv::Mat indices, distances;
   nearest(scene_descriptors, k, search, indices, distances);
   std::vector<int> first(n_models);
@@ -106,9 +184,15 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
     if (valid < 2)
       continue;
     if (ambiguity == Ambiguity::Reject) {
-      const float r = dist[1] > 0.f ? dist[0] / dist[1] : 1.f;
+      float second = dist[valid - 1];
+      for (int j = 1; j < valid; ++j)
+        if (group_[idx[j]] != group_[idx[0]]) {
+          second = dist[j];
+          break;
+        }
+      const float r = second > 0.f ? dist[0] / second : 1.f;
       if (r < ratio)
-        matches.push_back(make_match(idx[0], i, dist[0], r));
+        push_match(matches, idx[0], i, dist[0], r, false);
       continue;
     }
     // The look-alikes of this feature: the models whose nearest descriptor fits nearly as
@@ -122,11 +206,13 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
     // The ratio test's second neighbour: the nearest that is none of those (without one among
     // the neighbours, the farthest bounds it below).
     float second = dist[valid - 1];
-    for (int j = 0; j < valid; ++j)
-      if (first[owner_[idx[j]]] != j) {
+    for (int j = 0; j < valid; ++j) {
+      const int f = first[owner_[idx[j]]];
+      if (f != j && (f < 0 || group_[idx[f]] != group_[idx[j]])) {
         second = dist[j];
         break;
       }
+    }
     const long look_alikes =
         std::count_if(first.begin(), first.end(), [](int j) { return j >= 0; });
     for (int m = 0; m < n_models; ++m) {
@@ -136,8 +222,7 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
       const float r = second > 0.f ? d / second : 1.f;
       if (r >= ratio)
         continue;
-      matches.push_back(make_match(idx[first[m]], i, d, r));
-      matches.back().shared = look_alikes > 1;
+      push_match(matches, idx[first[m]], i, d, r, look_alikes > 1);
     }
   }
   return matches;

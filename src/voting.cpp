@@ -140,6 +140,21 @@ std::vector<int> refine_from_members(const ModelScene& ms, const std::vector<int
   return refine_pose(ms, pose, allow_scale, claimed);
 }
 
+/// Claims the inliers of an instance, and with each the other matches of its scene feature
+/// (the copies of a repeated part): one scene feature shows one object.
+void claim(const ModelScene& ms, const std::vector<int>& in, std::vector<char>& claimed) {
+  const int n = static_cast<int>(ms.matches.size());
+  for (int i : in) {
+    claimed[i] = 1;
+    // Matches come ordered by scene feature: its other matches are the neighbours in the list.
+    const int feature = ms.matches[i].scene_point;
+    for (int j = i - 1; j >= 0 && ms.matches[j].scene_point == feature; --j)
+      claimed[j] = 1;
+    for (int j = i + 1; j < n && ms.matches[j].scene_point == feature; ++j)
+      claimed[j] = 1;
+  }
+}
+
 /// Splits a centre cluster's votes (indices into ms.votes) by their rotation, largest first.
 std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
                                                 const std::vector<int>& members) {
@@ -254,8 +269,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       }
       if (in.size() < kSparseInliers && inlier_rms(ms, in, inst.homography) > kMaxSparseRmsPx)
         continue;
-      for (int i : in)
-        claimed[i] = 1;
+      claim(ms, in, claimed);
       inst.matches = static_cast<int>(in.size());
       inst.distinct_matches = distinct_among(ms, in);
       inst.support = scene_points(ms, in);

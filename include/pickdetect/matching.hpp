@@ -37,7 +37,11 @@ enum class Ambiguity {
 
 /// Matches scene descriptors against the descriptors of every model at once (one search index
 /// over all of them); a scene feature that fits several models about equally well is rejected
-/// or shared, as asked (Ambiguity). Immutable once built; copies share the search index.
+/// or shared, as asked (Ambiguity). A model picture whose design repeats a part (a bundle of
+/// identical packs) is matched against itself when the matcher is built: a scene feature on
+/// such a part gets one match for each copy, so that it votes for every place it could mean,
+/// and the copies are not each other's rivals in the ratio test. Immutable once built; copies
+/// share the search index.
 class Matcher {
 public:
   Matcher() = default;
@@ -60,12 +64,22 @@ private:
   void nearest(const cv::Mat& queries, int k, Search search, cv::Mat& indices,
                cv::Mat& distances) const;
   Match make_match(int row, int scene_point, float distance, float ratio) const;
+  /// Repeated designs: groups the rows that are copies of one printed part of their model
+  /// picture (the picture matched against itself).
+  void find_repeats(const std::vector<Model>& models);
+  /// Appends the match of a scene feature to `row`, or, when `row` is a copy of a repeated
+  /// part, one match to each of its copies.
+  void push_match(std::vector<Match>& matches, int row, int scene_point, float distance,
+                  float ratio, bool shared) const;
 
   FeatureKind kind_ = FeatureKind::Sift;
   cv::Mat descriptors_;     ///< All models' descriptors, stacked.
   std::vector<int> owner_;  ///< Row -> model index.
   std::vector<int> offset_; ///< Model index -> first row.
   std::shared_ptr<cv::flann::Index> index_;
+  std::vector<int> group_;               ///< Row -> its repeat group (itself when unrepeated).
+  std::vector<std::vector<int>> copies_; ///< Row -> the rows of its group (empty: none).
+  int largest_group_ = 1;
 };
 
 } // namespace pickdetect

@@ -1,0 +1,73 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// A model whose picture repeats a part (a bundle of identical packs): every copy is a place a
+// scene feature could mean, and the bundle is placed where all its packs agree.
+#include "../common/box.hpp"
+#include "../common/scene.hpp"
+
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
+
+#include <vector>
+
+using namespace pickdetect;
+using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::Pose;
+
+namespace {
+
+/// A bundle of `packs` box.png pictures side by side, as one model.
+Model bundle_model(int packs) {
+  Model m;
+  m.name = "bundle";
+  std::vector<cv::Mat> row(packs, box_model().image);
+  cv::hconcat(row, m.image);
+  m.mask = cv::Mat(m.image.size(), CV_8UC1, cv::Scalar(255));
+  const float w = static_cast<float>(m.image.cols), h = static_cast<float>(m.image.rows);
+  m.principal_points = {{w / 2, h / 2}, {0, 0}, {w, 0}, {w, h}, {0, h}};
+  m.outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
+  compute_model_features(m);
+  return m;
+}
+
+TEST(RepeatedDesign, ABundleOfIdenticalPacksIsFoundWhereAllItsPacksAgree) {
+  const Model bundle = bundle_model(3);
+  const Detector detector({bundle});
+  const cv::Size frame(900, 480);
+  cv::Mat scene = test_scene::plain_background(frame, 100);
+  const std::vector<Pose> poses = {{{450.f, 240.f}, 20.0, 0.8}};
+  test_scene::paste(scene, bundle.image, poses);
+  const Detection d = detector.detect(scene);
+  ASSERT_EQ(d.instances.size(), 1u) << "one bundle in view, one instance (no copies shifted by "
+                                       "a pack, no packs on their own)";
+  const Instance& inst = d.instances[0];
+  EXPECT_LT(cv::norm(inst.center - poses[0].center), 1.0)
+      << "expected the bundle's centre at (450, 240), got (" << inst.center.x << ", "
+      << inst.center.y << ")";
+  EXPECT_NEAR(inst.scale, 0.8, 0.02);
+  EXPECT_GE(inst.matches, 60) << "the features of every pack support the one instance";
+}
+
+TEST(RepeatedDesign, TwoBundlesSideBySideAreEachFoundOnce) {
+  const Model bundle = bundle_model(2);
+  const Detector detector({bundle});
+  const double scale = 0.5;
+  const float width = static_cast<float>(bundle.image.cols * scale);
+  const cv::Size frame(static_cast<int>(2 * width) + 120, 300);
+  cv::Mat scene = test_scene::plain_background(frame, 100);
+  const std::vector<Pose> poses = {{{60.f + width / 2, 150.f}, 0.0, scale},
+                                   {{60.f + 1.5f * width, 150.f}, 0.0, scale}};
+  test_scene::paste(scene, bundle.image, poses);
+  const Detection d = detector.detect(scene);
+  ASSERT_EQ(d.instances.size(), 2u)
+      << "two touching bundles: four identical packs in a row, two instances";
+  for (const Pose& p : poses) {
+    bool found = false;
+    for (const Instance& inst : d.instances)
+      found = found || cv::norm(inst.center - p.center) < 1.5;
+    EXPECT_TRUE(found) << "no instance at (" << p.center.x << ", " << p.center.y << ")";
+  }
+}
+
+} // namespace
