@@ -9,6 +9,8 @@
 #   read-instances       python3 dlopens the instrumented plugin
 #   record-annotated     gst-launch-1.0 dlopens the instrumented plugin
 #   eval-end-to-end      python3 + GStreamer's Python bindings, as read-instances
+#   json-tcp, json-mqtt  gst-launch-1.0 (pipelines/serve-json-tcp.sh, publish-mqtt.sh) dlopens
+#                        the instrumented plugin
 # Extra arguments go to meson test (e.g. a test name).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -28,7 +30,8 @@ export LSAN_OPTIONS="suppressions=$supp:print_suppressions=0"
 # The GStreamer plugin scanner is a plain program: it could not load the instrumented plugin.
 export GST_REGISTRY_FORK=no
 
-skip=(meta-api-valgrind meta-api-pkg-config read-instances record-annotated eval-end-to-end)
+skip=(meta-api-valgrind meta-api-pkg-config read-instances record-annotated eval-end-to-end
+  json-tcp json-mqtt)
 tests=()
 if [ $# -eq 0 ]; then
   while read -r name; do
