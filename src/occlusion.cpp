@@ -219,8 +219,9 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
         fill(instances[j].outline, 0);
       inst.visibility = std::min(1.0, cv::countNonZero(seen) / area[i]);
     }
-    const bool grasp_in_frame = inst.grasp.x >= 0.f && inst.grasp.y >= 0.f &&
-                                inst.grasp.x < frame_size.width && inst.grasp.y < frame_size.height;
+    const bool grasp_in_frame = inst.grasp.x >= kGraspMarginPx && inst.grasp.y >= kGraspMarginPx &&
+                                inst.grasp.x < frame_size.width - kGraspMarginPx &&
+                                inst.grasp.y < frame_size.height - kGraspMarginPx;
     inst.pickable = !inst.covered && grasp_in_frame && inst.visibility >= kMinPickableVisibility;
     inst.pick_order = 0;
   }

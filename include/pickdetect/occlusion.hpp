@@ -20,6 +20,9 @@ constexpr double kOverlapTolerance = 0.005;
 constexpr double kCoverTolerance = 0.01;
 /// An instance is pickable only when at least this share of its outline is seen.
 constexpr double kMinPickableVisibility = 0.5;
+/// ...and its grasp point lies at least this many pixels inside the frame: one on the frame's
+/// edge, where a fraction of a pixel decides, is not known to be in view.
+constexpr float kGraspMarginPx = 2.f;
 
 /// Area of the intersection of two outlines, in square pixels (outlines are taken as convex).
 double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b);
@@ -46,7 +49,7 @@ void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<M
 /// given, the frame shows something else than the model's picture over a connected patch of
 /// it: an object that is no instance lying on it),
 /// `visibility` (share of its outline inside the frame and under no instance on top of it),
-/// `pickable` (not covered, grasp point in the frame, visibility at least
+/// `pickable` (not covered, grasp point kGraspMarginPx inside the frame, visibility at least
 /// kMinPickableVisibility) and `pick_order` (1 = first, by score, among the pickable).
 /// `models` are indexed by Instance::model; `grey`, the frame, is optional; `kind` names the
 /// features the instances were found with.
