@@ -57,6 +57,10 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
     const cv::Mat& d = models[m].features(kind).descriptors;
     offset_.push_back(static_cast<int>(owner_.size()));
     owner_.insert(owner_.end(), d.rows, static_cast<int>(m));
+    const auto& kps = models[m].features(kind).keypoints;
+    keypoint_.insert(keypoint_.end(), kps.begin(),
+                     kps.begin() + std::min<size_t>(kps.size(), d.rows));
+    keypoint_.resize(owner_.size());
     if (!d.empty())
       parts.push_back(d);
   }
@@ -107,11 +111,41 @@ void Matcher::find_repeats(const std::vector<Model>& models) {
   }
   copies_.assign(n, {});
   largest_group_ = 1;
-  for (int i = 0; i < n; ++i)
-    if (members[group_[i]].size() > 1) {
-      copies_[i] = members[group_[i]];
-      largest_group_ = std::max(largest_group_, static_cast<int>(copies_[i].size()));
+  for (int i = 0; i < n; ++i) {
+    const std::vector<int>& group = members[group_[i]];
+    largest_group_ = std::max(largest_group_, static_cast<int>(group.size()));
+    if (group.size() < 2)
+      continue;
+    // One copy per place: the row itself, then each member farther than the gap from those
+    // taken (members at one spot are views of one keypoint, not copies).
+    const int m = owner_[i];
+    const auto& kps = models[m].features(kind_).keypoints;
+    std::vector<int> taken = {i};
+    for (int other : group) {
+      const cv::KeyPoint& b = kps[other - offset_[m]];
+      bool apart = true;
+      for (int t : taken) {
+        const cv::KeyPoint& a = kps[t - offset_[m]];
+        const float gap = std::max(kMinRepeatGapPx, kRepeatGapSizes * std::max(a.size, b.size));
+        const cv::Point2f d = a.pt - b.pt;
+        apart = apart && d.dot(d) >= gap * gap;
+      }
+      if (apart)
+        taken.push_back(other);
     }
+    if (taken.size() > 1)
+      copies_[i] = std::move(taken);
+  }
+}
+
+bool Matcher::same_place(int a, int b) const {
+  if (owner_[a] != owner_[b])
+    return false;
+  const cv::KeyPoint& p = keypoint_[a];
+  const cv::KeyPoint& q = keypoint_[b];
+  const float gap = std::max(kMinRepeatGapPx, kRepeatGapSizes * std::max(p.size, q.size));
+  const cv::Point2f d = p.pt - q.pt;
+  return d.dot(d) < gap * gap;
 }
 
 void Matcher::push_match(std::vector<Match>& matches, int row, int scene_point, float distance,
@@ -186,7 +220,7 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
     if (ambiguity == Ambiguity::Reject) {
       float second = dist[valid - 1];
       for (int j = 1; j < valid; ++j)
-        if (group_[idx[j]] != group_[idx[0]]) {
+        if (group_[idx[j]] != group_[idx[0]] && !same_place(idx[j], idx[0])) {
           second = dist[j];
           break;
         }
@@ -208,7 +242,7 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
     float second = dist[valid - 1];
     for (int j = 0; j < valid; ++j) {
       const int f = first[owner_[idx[j]]];
-      if (f != j && (f < 0 || group_[idx[f]] != group_[idx[j]])) {
+      if (f != j && (f < 0 || (group_[idx[f]] != group_[idx[j]] && !same_place(idx[f], idx[j])))) {
         second = dist[j];
         break;
       }

@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -243,12 +244,25 @@ cv::Mat read_descriptors(const cv::FileNode& node, size_t rows, int cols, const 
 
 } // namespace
 
+/// Appends the SIFT features of the picture's tilted views (Model::max_tilt_deg) to `f`.
+static void add_tilted_views(const Model& model, Features& f) {
+  if (!(model.max_tilt_deg > 0.0))
+    return;
+  for (const TiltedView& view : tilted_views(model.max_tilt_deg)) {
+    const Features v = features_of_view(model.image, model.mask, view);
+    f.keypoints.insert(f.keypoints.end(), v.keypoints.begin(), v.keypoints.end());
+    if (!v.descriptors.empty())
+      f.descriptors.push_back(v.descriptors);
+  }
+}
+
 void compute_model_features(Model& model) {
   Features f = extract_features(model.image, model.mask, FeatureKind::Sift);
   if (static_cast<int>(f.keypoints.size()) < kMinModelKeypoints)
     throw Error("model picture " + in_quotes(model.image_path) + " yields only " +
                 std::to_string(f.keypoints.size()) + " SIFT keypoints (at least " +
                 std::to_string(kMinModelKeypoints) + " are needed): it has too little texture");
+  add_tilted_views(model, f);
   model.sift = std::move(f);
   model.orb = extract_features(model.image, model.mask, FeatureKind::Orb);
 }
@@ -321,6 +335,17 @@ Model load_model(const std::string& path) {
       if (!std::isfinite(model.height_mm) || model.height_mm < 0.0)
         throw Error(origin + ": 'height' must be a finite number of millimetres, 0 or more");
     }
+    // A cache written without max_tilt (before it existed) holds the picture's own features only.
+    const bool tilt_given = !root["max_tilt"].empty();
+    if (tilt_given) {
+      const cv::FileNode tilt = root["max_tilt"];
+      if (!tilt.isReal() && !tilt.isInt())
+        throw Error(origin + ": 'max_tilt' must be a number (degrees off the face's normal)");
+      model.max_tilt_deg = static_cast<double>(tilt);
+      if (!(model.max_tilt_deg >= 0.0 && model.max_tilt_deg <= kMaxTiltDeg))
+        throw Error(origin + ": 'max_tilt' must lie between 0 and " +
+                    std::to_string(static_cast<int>(kMaxTiltDeg)) + " degrees");
+    }
     check_geometry(model, origin);
 
     if (!root["keypoints"].empty() && !root["descriptors"].empty()) {
@@ -338,6 +363,8 @@ Model load_model(const std::string& path) {
       if (static_cast<int>(sift.keypoints.size()) < kMinModelKeypoints)
         throw Error(origin + ": the cache holds only " + std::to_string(sift.keypoints.size()) +
                     " keypoints (at least " + std::to_string(kMinModelKeypoints) + " are needed)");
+      if (!tilt_given)
+        add_tilted_views(model, sift);
       if (!root["orb_keypoints"].empty() && !root["orb_descriptors"].empty()) {
         cv::read(root["orb_keypoints"], model.orb.keypoints);
         model.orb.descriptors =
@@ -389,6 +416,7 @@ void save_model(const Model& model, const std::string& path, bool cache_features
   store << "grasp_point" << model.grasp_point;
   if (model.height_mm > 0.0)
     store << "height" << model.height_mm;
+  store << "max_tilt" << model.max_tilt_deg;
   if (cache_features && !model.sift.keypoints.empty()) {
     cv::write(store, "keypoints", model.sift.keypoints);
     store << "descriptors" << model.sift.descriptors;

@@ -51,6 +51,24 @@ Features extract_features_scaled(const cv::Mat& grey, double scale,
 /// their keypoints. Model pictures keep the full threshold.
 double exposure_contrast_share(const cv::Mat& grey);
 
+/// One simulated view of a model picture (ASIFT's view simulation): the face turned by `phi`
+/// degrees in the picture plane, then tilted away from the camera so that it looks `tilt` times
+/// narrower across (tilt = 1 / cos of the angle off its normal).
+struct TiltedView {
+  double tilt = 1.0;
+  double phi = 0.0;
+};
+
+/// The views that cover faces seen up to `max_tilt_deg` off their normal (ASIFT's sampling:
+/// tilts in steps of sqrt(2), turns in steps of 72 / tilt degrees over half a turn); none
+/// below 45 degrees, which the picture's own SIFT features already survive.
+std::vector<TiltedView> tilted_views(double max_tilt_deg);
+
+/// SIFT features of `grey` (CV_8UC1; `mask` as for extract_features) seen in `view`, with
+/// their positions, orientations and sizes carried back into the picture's pixels.
+Features features_of_view(const cv::Mat& grey, const cv::Mat& mask, const TiltedView& view,
+                          double contrast_threshold = kSiftContrastThreshold);
+
 /// A correspondence between a model keypoint and a scene keypoint that passed the 2NN test.
 struct Match {
   int model = 0;        ///< Index of the model (in the detector's model list).

@@ -73,8 +73,11 @@ private:
                   float ratio, bool shared) const;
 
   FeatureKind kind_ = FeatureKind::Sift;
-  cv::Mat descriptors_;     ///< All models' descriptors, stacked.
-  std::vector<int> owner_;  ///< Row -> model index.
+  cv::Mat descriptors_;                ///< All models' descriptors, stacked.
+  std::vector<int> owner_;             ///< Row -> model index.
+  std::vector<cv::KeyPoint> keypoint_; ///< Row -> its model keypoint.
+  /// Whether two rows (of one model) lie at one place of the picture: views of one keypoint.
+  bool same_place(int a, int b) const;
   std::vector<int> offset_; ///< Model index -> first row.
   std::shared_ptr<cv::flann::Index> index_;
   std::vector<int> group_;               ///< Row -> its repeat group (itself when unrepeated).

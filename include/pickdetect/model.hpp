@@ -12,6 +12,12 @@ namespace pickdetect {
 
 /// The object to look for: one model picture, its principal points and its outline, plus the
 /// SIFT features of the picture (computed, or read back from a model file's cache).
+/// Default Model::max_tilt_deg: a face seen up to 60 degrees off its normal, as a carton lying
+/// in a heap or the far side of a tote under a camera 40 degrees off vertical shows it.
+constexpr double kDefaultMaxTiltDeg = 60.0;
+/// Largest Model::max_tilt_deg accepted (ASIFT's views stop near 80 degrees).
+constexpr double kMaxTiltDeg = 80.0;
+
 struct Model {
   std::string name;       ///< Shown as the instance's model name (ROI type, overlay label).
   std::string image_path; ///< The model picture the features come from.
@@ -25,7 +31,11 @@ struct Model {
   /// Millimetres from the work plane up to the object's top face (the model file's `height`),
   /// for positions on the plane (calibration.hpp); 0 = flat on the plane.
   double height_mm = 0.0;
-  Features sift; ///< SIFT features of the picture (the paper's).
+  /// Faces seen up to this many degrees off their normal are matched through views of the
+  /// picture simulated at those tilts (the model file's `max_tilt`; see tilted_views); 0 =
+  /// the picture's own SIFT features only. The simulated views' features are part of `sift`.
+  double max_tilt_deg = kDefaultMaxTiltDeg;
+  Features sift; ///< SIFT features of the picture (the paper's), and of its tilted views.
   Features orb;  ///< ORB features of the picture (the fast configuration).
 
   const Features& features(FeatureKind kind) const { return kind == FeatureKind::Orb ? orb : sift; }

@@ -164,3 +164,34 @@ TEST_F(ModelFiles, HugePictureIsRefusedFromItsHeaderBeforeDecoding) {
       "\xFF\xD8\xFF\xFE\0\x05hi!\xFF\xFF\xC2\0\x11\x08\x75\x30\x4E\x20\x03", 20);
   expect_refused(write("huge-header.jpg", jpeg_header), {path("huge-header.jpg"), "20000x30000"});
 }
+
+TEST_F(ModelFiles, MaxTiltChoosesTheSimulatedViewsAndTheCacheKeepsThem) {
+  const std::string picture = kData + "/box.png";
+  const Model plain =
+      load_model(write("plain.yml", "%YAML:1.0\nimage: \"" + picture + "\"\nmax_tilt: 0\n"));
+  const Model tilted = load_model(write("tilted.yml", "%YAML:1.0\nimage: \"" + picture + "\"\n"));
+  EXPECT_EQ(plain.max_tilt_deg, 0.0);
+  EXPECT_EQ(tilted.max_tilt_deg, kDefaultMaxTiltDeg);
+  EXPECT_GT(tilted.sift.keypoints.size(), 2 * plain.sift.keypoints.size())
+      << "the tilted views add features to the picture's own";
+  // Written with its features and read back: the same features, not computed again.
+  save_model(tilted, path("cached.yml"));
+  const Model cached = load_model(path("cached.yml"));
+  EXPECT_EQ(cached.max_tilt_deg, kDefaultMaxTiltDeg);
+  EXPECT_EQ(cached.sift.keypoints.size(), tilted.sift.keypoints.size());
+  // A cache written before max_tilt existed holds the picture's own features: the views are
+  // added to it.
+  cv::FileStorage old(path("old.yml"), cv::FileStorage::WRITE);
+  old << "image" << picture;
+  cv::write(old, "keypoints", plain.sift.keypoints);
+  old << "descriptors" << plain.sift.descriptors;
+  old.release();
+  EXPECT_EQ(load_model(path("old.yml")).sift.keypoints.size(), tilted.sift.keypoints.size());
+}
+
+TEST_F(ModelFiles, AMaxTiltOutOfRangeIsRefusedByName) {
+  expect_refused(write("m.yml", "%YAML:1.0\nimage: \"" + kData + "/box.png\"\nmax_tilt: 85\n"),
+                 {"m.yml", "'max_tilt' must lie between 0 and 80"});
+  expect_refused(write("n.yml", "%YAML:1.0\nimage: \"" + kData + "/box.png\"\nmax_tilt: steep\n"),
+                 {"n.yml", "'max_tilt' must be a number"});
+}
