@@ -134,6 +134,19 @@ cv::Point2d Tracker::predicted_offset(const Track& track, std::int64_t time_ns) 
   return {0.0, 0.0};
 }
 
+TrackEnd Tracker::end_reason(const Track& track, cv::Point2d predicted, cv::Size frame) const {
+  const double size = object_size(track.last);
+  const bool near_edge = predicted.x < size / 2 || predicted.y < size / 2 ||
+                         predicted.x > frame.width - size / 2 ||
+                         predicted.y > frame.height - size / 2;
+  if (!inside(predicted, frame) || near_edge)
+    return TrackEnd::LeftView;
+  // Still: it would have moved less than a tenth of its size over the timeout.
+  const double speed = track.has_velocity ? cv::norm(track.velocity) : 0.0;
+  return speed * settings_.timeout_ms / 1000.0 < 0.1 * size ? TrackEnd::Vanished
+                                                            : TrackEnd::Timeout;
+}
+
 TrackEvent Tracker::ended(const Track& track, TrackEnd reason) const {
   TrackEvent e;
   e.started = false;
@@ -178,6 +191,22 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
     out.events = end_all(TrackEnd::Reset);
   has_time_ = true;
   last_time_ns_ = time_ns;
+
+  // Tracks unseen for longer than the timeout end before they could take a detection.
+  std::vector<TrackEvent> expired;
+  {
+    std::vector<Track> live;
+    for (const Track& track : tracks_) {
+      if (static_cast<double>(time_ns - track.last_seen_ns) / 1e6 <= settings_.timeout_ms) {
+        live.push_back(track);
+        continue;
+      }
+      const cv::Point2d predicted =
+          cv::Point2d(track.last.center.x, track.last.center.y) + predicted_offset(track, time_ns);
+      expired.push_back(ended(track, end_reason(track, predicted, frame)));
+    }
+    tracks_ = std::move(live);
+  }
 
   // Candidate pairs (cost, track, detection), gated, of the same model.
   std::vector<std::tuple<double, size_t, size_t>> pairs;
@@ -323,23 +352,21 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
     const cv::Point2d offset = offsets[t];
     const cv::Point2d predicted = cv::Point2d(track.last.center.x, track.last.center.y) + offset;
     const double unseen_ms = static_cast<double>(time_ns - track.last_seen_ns) / 1e6;
-    const double size = object_size(track.last);
-    const double speed = track.has_velocity ? cv::norm(track.velocity) : 0.0;
     if (!inside(predicted, frame)) {
       ends.push_back(ended(track, TrackEnd::LeftView));
       continue;
     }
     if (unseen_ms > settings_.timeout_ms) {
-      const bool near_edge = predicted.x < size / 2 || predicted.y < size / 2 ||
-                             predicted.x > frame.width - size / 2 ||
-                             predicted.y > frame.height - size / 2;
-      // Still: it moved less than a tenth of its size over the timeout.
-      const bool still = speed * settings_.timeout_ms / 1000.0 < 0.1 * size;
-      ends.push_back(ended(track, near_edge ? TrackEnd::LeftView
-                                            : (still ? TrackEnd::Vanished : TrackEnd::Timeout)));
+      ends.push_back(ended(track, end_reason(track, predicted, frame)));
       continue;
     }
-    if (unseen_ms <= settings_.carry_forward_ms) {
+    // Carried forward while time goes on, unless a detection (of any model) now lies where
+    // it is predicted: that one replaces it.
+    bool replaced = false;
+    const std::vector<cv::Point2f> predicted_outline = shifted(track.last.outline, offset);
+    for (const Instance& det : detected)
+      replaced = replaced || hull_iou(predicted_outline, det.outline) > 0.3;
+    if (unseen_ms > 0.0 && unseen_ms <= settings_.carry_forward_ms && !replaced) {
       TrackedInstance ti;
       ti.instance = moved(track.last, offset);
       ti.instance.pickable = false;
@@ -355,6 +382,7 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
   }
   tracks_ = std::move(kept);
 
+  out.events.insert(out.events.end(), expired.begin(), expired.end());
   out.events.insert(out.events.end(), ends.begin(), ends.end());
   for (const Track& t : started) {
     TrackEvent e;

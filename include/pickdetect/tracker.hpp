@@ -154,6 +154,7 @@ private:
 
   cv::Point2d predicted_offset(const Track& track, std::int64_t time_ns) const;
   TrackEvent ended(const Track& track, TrackEnd reason) const;
+  TrackEnd end_reason(const Track& track, cv::Point2d predicted, cv::Size frame) const;
   void update_count(Track& track, std::vector<CountEvent>& counts);
 
   TrackerSettings settings_;
