@@ -42,10 +42,21 @@ template <typename Point> GValue double_array(const std::vector<Point>& points) 
   return array;
 }
 
+/// Per instance, what tracking adds (null pointers and empty lists: no tracking).
+using TrackFields = std::vector<pickdetect::TrackedInstance>;
+
+void add_track_fields(GstStructure* s, const pickdetect::TrackedInstance& t) {
+  gst_structure_set(s, "track-id", G_TYPE_UINT64, static_cast<guint64>(t.track_id), "first-seen",
+                    G_TYPE_UINT64, static_cast<guint64>(std::max<std::int64_t>(0, t.first_seen_ns)),
+                    "frames-seen", G_TYPE_INT, t.frames_seen, "velocity-x", G_TYPE_DOUBLE,
+                    t.velocity.x, "velocity-y", G_TYPE_DOUBLE, t.velocity.y, "tracked",
+                    G_TYPE_BOOLEAN, static_cast<gboolean>(t.tracked), nullptr);
+}
+
 /// The "pick-instance" structure of ROI params and bus messages; `plane` adds the world fields.
 GstStructure* instance_structure(const pickdetect::Instance& instance,
                                  const std::optional<pickdetect::PlaneInstance>& plane,
-                                 double height_mm) {
+                                 double height_mm, const pickdetect::TrackedInstance* track) {
   GstStructure* s = gst_structure_new(
       "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "center-x",
       G_TYPE_DOUBLE, static_cast<double>(instance.center.x), "center-y", G_TYPE_DOUBLE,
@@ -69,6 +80,8 @@ GstStructure* instance_structure(const pickdetect::Instance& instance,
     GValue world_outline = double_array(plane->outline);
     gst_structure_take_value(s, "world-outline", &world_outline);
   }
+  if (track)
+    add_track_fields(s, *track);
   return s;
 }
 
@@ -109,8 +122,11 @@ std::vector<GstPickDetectPoint> to_meta_points(const std::vector<cv::Point2f>& p
 
 void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& instances,
                   const PlaneInstances& planes, const pickdetect::Detector& detector, int width,
-                  int height) {
+                  int height, const TrackFields& tracks, const pickdetect::CommonMotion& motion) {
   GstPickDetectMeta* meta = gst_buffer_add_pickdetect_meta(buffer);
+  meta->has_motion = motion.found;
+  meta->motion_x = motion.velocity.x;
+  meta->motion_y = motion.velocity.y;
   for (size_t i = 0; i < instances.size(); i++) {
     const pickdetect::Instance& in = instances[i];
     std::vector<GstPickDetectPoint> points = to_meta_points(in.points);
@@ -135,6 +151,15 @@ void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& in
     out.grasp_y = in.grasp.y;
     out.grasp_angle = in.grasp_angle;
     out.height = model_height(detector, in);
+    if (i < tracks.size()) {
+      const pickdetect::TrackedInstance& t = tracks[i];
+      out.track_id = t.track_id;
+      out.first_seen = static_cast<guint64>(std::max<std::int64_t>(0, t.first_seen_ns));
+      out.frames_seen = static_cast<guint>(t.frames_seen);
+      out.velocity_x = t.velocity.x;
+      out.velocity_y = t.velocity.y;
+      out.tracked = t.tracked;
+    }
     std::vector<GstPickDetectPoint> world_outline;
     if (i < planes.size() && planes[i]) {
       const pickdetect::PlaneInstance& plane = *planes[i];
@@ -177,18 +202,26 @@ void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& in
     GstVideoRegionOfInterestMeta* roi = gst_buffer_add_video_region_of_interest_meta(
         buffer, in.model_name.c_str(), static_cast<guint>(left), static_cast<guint>(top),
         static_cast<guint>(right - left), static_cast<guint>(bottom - top));
-    roi->id = next_id++;
+    // With tracking the ROI's id is the track's (DL Streamer's convention, with an object_id
+    // param), the same in every frame the object is in.
+    const pickdetect::TrackedInstance* track = i < tracks.size() ? &tracks[i] : nullptr;
+    roi->id = track ? static_cast<gint>(track->track_id) : next_id++;
     roi->parent_id = -1;
     gst_video_region_of_interest_meta_add_param(
         roi, instance_structure(in, i < planes.size() ? planes[i] : std::nullopt,
-                                model_height(detector, in)));
+                                model_height(detector, in), track));
+    if (track)
+      gst_video_region_of_interest_meta_add_param(
+          roi, gst_structure_new("object_id", "id", G_TYPE_INT, static_cast<gint>(track->track_id),
+                                 nullptr));
   }
 }
 
 GstStructure* message_structure(GstBuffer* buffer, const GstSegment& segment,
                                 const pickdetect::Detection& detection,
                                 const PlaneInstances& planes, const pickdetect::Detector& detector,
-                                double metadata_ms, double overlay_ms) {
+                                double metadata_ms, double overlay_ms, const TrackFields& tracks,
+                                const pickdetect::CommonMotion* motion) {
   const GstClockTime ts = GST_BUFFER_PTS(buffer);
   GstClockTime running_time = GST_CLOCK_TIME_NONE, stream_time = GST_CLOCK_TIME_NONE;
   if (segment.format == GST_FORMAT_TIME) {
@@ -203,7 +236,8 @@ GstStructure* message_structure(GstBuffer* buffer, const GstSegment& segment,
     GValue item = G_VALUE_INIT;
     g_value_init(&item, GST_TYPE_STRUCTURE);
     g_value_take_boxed(&item, instance_structure(in, i < planes.size() ? planes[i] : std::nullopt,
-                                                 model_height(detector, in)));
+                                                 model_height(detector, in),
+                                                 i < tracks.size() ? &tracks[i] : nullptr));
     gst_value_list_append_and_take_value(&list, &item);
   }
   GstStructure* s =
@@ -215,6 +249,10 @@ GstStructure* message_structure(GstBuffer* buffer, const GstSegment& segment,
   gst_structure_set(s, "features-ms", G_TYPE_DOUBLE, t.features_ms, "matching-ms", G_TYPE_DOUBLE,
                     t.matching_ms, "clustering-ms", G_TYPE_DOUBLE, t.clustering_ms, "metadata-ms",
                     G_TYPE_DOUBLE, metadata_ms, "overlay-ms", G_TYPE_DOUBLE, overlay_ms, nullptr);
+  if (motion)
+    gst_structure_set(s, "motion", G_TYPE_BOOLEAN, static_cast<gboolean>(motion->found), "motion-x",
+                      G_TYPE_DOUBLE, motion->velocity.x, "motion-y", G_TYPE_DOUBLE,
+                      motion->velocity.y, nullptr);
   return s;
 }
 
@@ -324,29 +362,47 @@ cv::Mat FrameFormat::grey(const GstVideoFrame& frame, cv::Mat& scratch) const {
   return scratch;
 }
 
-GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
-                            const FrameConfig& config, const pickdetect::Detector& detector,
-                            const GstSegment& segment, GstStructure** message) {
-  pickdetect::Detection detection;
-  double overlay_ms = 0.0;
-  {
-    GstVideoFrame frame;
-    const auto flags = static_cast<GstMapFlags>(config.draw ? GST_MAP_READWRITE : GST_MAP_READ);
-    if (!gst_video_frame_map(&frame, const_cast<GstVideoInfo*>(&format.info()), buffer, flags)) {
-      GST_ELEMENT_ERROR(element, STREAM, FAILED, ("Could not map the frame"),
-                        ("buffer of %" G_GSIZE_FORMAT " bytes, caps %s %dx%d",
-                         gst_buffer_get_size(buffer), GST_VIDEO_INFO_NAME(&format.info()),
-                         GST_VIDEO_INFO_WIDTH(&format.info()),
-                         GST_VIDEO_INFO_HEIGHT(&format.info())));
-      return GST_FLOW_ERROR;
-    }
-    const GstFlowReturn ret =
-        detect_and_draw(element, frame, format, config, detector, detection, overlay_ms);
-    gst_video_frame_unmap(&frame);
-    if (ret != GST_FLOW_OK)
-      return ret;
-  }
+GstStructure* track_structure(const pickdetect::TrackEvent& e) {
+  GstStructure* s = gst_structure_new(
+      "pickdetect-track", "event", G_TYPE_STRING, e.started ? "start" : "end", "track-id",
+      G_TYPE_UINT64, static_cast<guint64>(e.track_id), "model", G_TYPE_STRING, e.model.c_str(),
+      "first-seen", G_TYPE_UINT64, static_cast<guint64>(std::max<std::int64_t>(0, e.first_seen_ns)),
+      "last-seen", G_TYPE_UINT64, static_cast<guint64>(std::max<std::int64_t>(0, e.last_seen_ns)),
+      "frames-seen", G_TYPE_INT, e.frames_seen, "center-x", G_TYPE_DOUBLE,
+      static_cast<double>(e.last.center.x), "center-y", G_TYPE_DOUBLE,
+      static_cast<double>(e.last.center.y), "angle", G_TYPE_DOUBLE, e.last.angle, "scale",
+      G_TYPE_DOUBLE, e.last.scale, nullptr);
+  GValue outline = double_array(e.last.outline);
+  gst_structure_take_value(s, "outline", &outline);
+  if (!e.started)
+    gst_structure_set(s, "reason", G_TYPE_STRING, pickdetect::track_end_name(e.reason), nullptr);
+  return s;
+}
 
+GstFlowReturn detect_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
+                           const FrameConfig& config, const pickdetect::Detector& detector,
+                           FrameDetection& found) {
+  GstVideoFrame frame;
+  const auto flags = static_cast<GstMapFlags>(config.draw ? GST_MAP_READWRITE : GST_MAP_READ);
+  if (!gst_video_frame_map(&frame, const_cast<GstVideoInfo*>(&format.info()), buffer, flags)) {
+    GST_ELEMENT_ERROR(element, STREAM, FAILED, ("Could not map the frame"),
+                      ("buffer of %" G_GSIZE_FORMAT " bytes, caps %s %dx%d",
+                       gst_buffer_get_size(buffer), GST_VIDEO_INFO_NAME(&format.info()),
+                       GST_VIDEO_INFO_WIDTH(&format.info()),
+                       GST_VIDEO_INFO_HEIGHT(&format.info())));
+    return GST_FLOW_ERROR;
+  }
+  const GstFlowReturn ret =
+      detect_and_draw(element, frame, format, config, detector, found.detection, found.overlay_ms);
+  gst_video_frame_unmap(&frame);
+  return ret;
+}
+
+GstFlowReturn attach_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
+                           const FrameConfig& config, const pickdetect::Detector& detector,
+                           const GstSegment& segment, FrameDetection& found, GstStructure** message,
+                           FrameTracking* tracking) {
+  pickdetect::Detection& detection = found.detection;
   // The frame is unmapped, so the buffer is writable again for the metas.
   if (!gst_buffer_is_writable(buffer)) {
     GST_ELEMENT_ERROR(element, CORE, FAILED, (nullptr), ("buffer not writable, cannot add metas"));
@@ -354,20 +410,74 @@ GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameF
   }
   try {
     const auto attaching = std::chrono::steady_clock::now();
+    TrackFields tracks;
+    pickdetect::CommonMotion motion;
+    if (tracking && tracking->tracker) {
+      // Running time; a frame without a timestamp follows the last one by a frame.
+      const GstVideoInfo& info = format.info();
+      const gint64 frame_ns =
+          GST_VIDEO_INFO_FPS_N(&info) > 0
+              ? static_cast<gint64>(gst_util_uint64_scale_int(
+                    GST_SECOND, GST_VIDEO_INFO_FPS_D(&info), GST_VIDEO_INFO_FPS_N(&info)))
+              : static_cast<gint64>(GST_SECOND / 30);
+      GstClockTime running = GST_CLOCK_TIME_NONE;
+      if (segment.format == GST_FORMAT_TIME && GST_BUFFER_PTS_IS_VALID(buffer))
+        running = gst_segment_to_running_time(&segment, GST_FORMAT_TIME, GST_BUFFER_PTS(buffer));
+      const gint64 now = GST_CLOCK_TIME_IS_VALID(running)
+                             ? static_cast<gint64>(running)
+                             : tracking->last_time.value_or(-frame_ns) + frame_ns;
+      tracking->last_time = now;
+      pickdetect::TrackedFrame tracked = tracking->tracker->update(
+          detection.instances, now,
+          cv::Size(GST_VIDEO_INFO_WIDTH(&info), GST_VIDEO_INFO_HEIGHT(&info)));
+      // Those carried forward come last, within max-instances.
+      const size_t limit = config.settings.max_instances > 0
+                               ? std::max(detection.instances.size(),
+                                          static_cast<size_t>(config.settings.max_instances))
+                               : tracked.instances.size();
+      if (tracked.instances.size() > limit)
+        tracked.instances.resize(limit);
+      detection.instances.clear();
+      for (const pickdetect::TrackedInstance& t : tracked.instances)
+        detection.instances.push_back(t.instance);
+      tracks = std::move(tracked.instances);
+      motion = tracked.motion;
+      for (const pickdetect::TrackEvent& e : tracked.events)
+        tracking->messages.push_back(track_structure(e));
+      for (const pickdetect::CountEvent& c : tracked.counts)
+        tracking->messages.push_back(gst_structure_new(
+            "pickdetect-count", "track-id", G_TYPE_UINT64, static_cast<guint64>(c.track_id),
+            "model", G_TYPE_STRING, c.model.c_str(), "count", G_TYPE_INT, c.count, "total",
+            G_TYPE_INT, c.total, "running-time", G_TYPE_UINT64, static_cast<guint64>(now),
+            nullptr));
+    }
     const PlaneInstances planes =
         locate_all(element, detection, detector, config.calibration.get());
     attach_metas(buffer, detection.instances, planes, detector,
-                 GST_VIDEO_INFO_WIDTH(&format.info()), GST_VIDEO_INFO_HEIGHT(&format.info()));
+                 GST_VIDEO_INFO_WIDTH(&format.info()), GST_VIDEO_INFO_HEIGHT(&format.info()),
+                 tracks, motion);
     const double metadata_ms = ms_since(attaching);
+    const bool tracked = tracking && tracking->tracker;
     if (config.post_messages && message)
-      *message =
-          message_structure(buffer, segment, detection, planes, detector, metadata_ms, overlay_ms);
+      *message = message_structure(buffer, segment, detection, planes, detector, metadata_ms,
+                                   found.overlay_ms, tracks, tracked ? &motion : nullptr);
   } catch (const std::exception& e) {
     GST_ELEMENT_ERROR(element, CORE, FAILED, ("Could not attach the instances: %s", e.what()),
                       (nullptr));
     return GST_FLOW_ERROR;
   }
   return GST_FLOW_OK;
+}
+
+GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
+                            const FrameConfig& config, const pickdetect::Detector& detector,
+                            const GstSegment& segment, GstStructure** message,
+                            FrameTracking* tracking) {
+  FrameDetection found;
+  const GstFlowReturn ret = detect_frame(element, buffer, format, config, detector, found);
+  if (ret != GST_FLOW_OK)
+    return ret;
+  return attach_frame(element, buffer, format, config, detector, segment, found, message, tracking);
 }
 
 } // namespace gstpickdetect

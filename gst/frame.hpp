@@ -8,6 +8,7 @@
 
 #include <pickdetect/calibration.hpp>
 #include <pickdetect/detector.hpp>
+#include <pickdetect/tracker.hpp>
 
 #include <gst/gst.h>
 #include <gst/video/video.h>
@@ -15,7 +16,9 @@
 #include <opencv2/core.hpp>
 
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace gstpickdetect {
 
@@ -26,6 +29,29 @@ struct FrameConfig {
   bool post_messages = true;
   /// From the `calibration` property: instances are also placed on the work plane; null: not.
   std::shared_ptr<const pickdetect::Calibration> calibration;
+  bool tracking = true;                            ///< The `tracking` property.
+  double track_timeout_ms = 500.0;                 ///< The `track-timeout` property.
+  std::optional<pickdetect::CountLine> count_line; ///< The `count-line` property, parsed.
+};
+
+/// The stream's tracker, for attach_frame (streaming thread only).
+struct FrameTracking {
+  pickdetect::Tracker* tracker = nullptr; ///< Null: frame by frame, no track fields.
+  /// Tracker time of the last frame (running time, ns); frames without a timestamp follow it
+  /// by one frame duration.
+  std::optional<gint64> last_time;
+  /// The frame's "pickdetect-track" and "pickdetect-count" structures, for the caller to post
+  /// after the frame's own message.
+  std::vector<GstStructure*> messages;
+};
+
+/// The "pickdetect-track" structure of a track starting or ending.
+GstStructure* track_structure(const pickdetect::TrackEvent& event);
+
+/// What detect_frame found, for attach_frame.
+struct FrameDetection {
+  pickdetect::Detection detection;
+  double overlay_ms = 0.0;
 };
 
 /// What the negotiated caps decide about working on a frame; set once per caps.
@@ -62,8 +88,20 @@ private:
 /// metas (see the element's documentation). When `config.post_messages`, `*message` receives the
 /// "pickdetect" element message's structure (the caller posts it), timestamps taken from
 /// `segment`. Errors are posted on `element` and returned as GST_FLOW_ERROR. Never throws.
+/// With `tracking` and its tracker, the instances are tracked before they are attached.
 GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
                             const FrameConfig& config, const pickdetect::Detector& detector,
-                            const GstSegment& segment, GstStructure** message);
+                            const GstSegment& segment, GstStructure** message,
+                            FrameTracking* tracking = nullptr);
+
+/// process_frame in two halves: detection and drawing (any thread), then tracking and the metas
+/// (in frame order, where the tracker lives).
+GstFlowReturn detect_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
+                           const FrameConfig& config, const pickdetect::Detector& detector,
+                           FrameDetection& found);
+GstFlowReturn attach_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
+                           const FrameConfig& config, const pickdetect::Detector& detector,
+                           const GstSegment& segment, FrameDetection& found, GstStructure** message,
+                           FrameTracking* tracking);
 
 } // namespace gstpickdetect

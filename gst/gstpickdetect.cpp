@@ -41,6 +41,7 @@
 #include <pickdetect/detector.hpp>
 #include <pickdetect/error.hpp>
 #include <pickdetect/model.hpp>
+#include <pickdetect/tracker.hpp>
 
 #include <gst/video/video.h>
 #include <glib/gstdio.h>
@@ -50,6 +51,7 @@
 #include <algorithm>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <unistd.h>
@@ -81,6 +83,9 @@ enum {
   PROP_POST_MESSAGES,
   PROP_THREADS,
   PROP_CALIBRATION,
+  PROP_TRACKING,
+  PROP_TRACK_TIMEOUT,
+  PROP_COUNT_LINE,
 };
 
 #define DEFAULT_MODEL nullptr
@@ -98,6 +103,9 @@ constexpr gboolean DEFAULT_DRAW = FALSE;
 constexpr gboolean DEFAULT_POST_MESSAGES = TRUE;
 constexpr int DEFAULT_THREADS = 1;
 #define DEFAULT_CALIBRATION nullptr
+constexpr gboolean DEFAULT_TRACKING = TRUE;
+constexpr guint DEFAULT_TRACK_TIMEOUT = 500;
+#define DEFAULT_COUNT_LINE nullptr
 
 // The element's defaults are the core's.
 static_assert(pickdetect::Settings{}.method == pickdetect::Method::Voting);
@@ -111,6 +119,7 @@ static_assert(pickdetect::Settings{}.features == pickdetect::FeatureKind::Sift &
 static_assert(pickdetect::Settings{}.detection_scale == DEFAULT_DETECTION_SCALE);
 static_assert(pickdetect::Settings{}.contrast_threshold == DEFAULT_CONTRAST_THRESHOLD);
 static_assert(pickdetect::Settings{}.refine == static_cast<bool>(DEFAULT_REFINE));
+static_assert(pickdetect::TrackerSettings{}.timeout_ms == DEFAULT_TRACK_TIMEOUT);
 
 namespace {
 
@@ -132,11 +141,20 @@ struct GstPickDetectPrivate {
   int threads = DEFAULT_THREADS; ///< The `threads` property.
   int active_threads = 1;        ///< Frame threads since start (`threads` resolved).
   std::string calibration_path;  ///< The `calibration` property (loaded at start).
+  std::string count_line;        ///< The `count-line` property as set.
   // ---- streaming thread (and state changes while it is stopped) only ----
   std::shared_ptr<const gstpickdetect::FrameFormat> format; ///< From the caps, for new frames.
   std::unique_ptr<gstpickdetect::OrderedWorkers> workers;   ///< With more than one frame thread.
   GstFlowReturn drain_ret = GST_FLOW_OK; ///< A failed push while draining, told at the next frame.
   bool size_error_posted = false;        ///< Caps of the wrong size for the calibration, told once.
+  // Tracking (docs/tracking.md): the tracker lives from the first tracked frame on and keeps
+  // counting its ids across resets and restarts, so that no id is ever given twice.
+  pickdetect::Tracker tracker;
+  gstpickdetect::FrameTracking tracking;
+  bool tracking_on = false; ///< The tracker followed the last frame.
+  std::optional<pickdetect::CountLine> tracker_line;
+  const pickdetect::Detector* tracked_detector = nullptr; ///< The models the tracks are of.
+  int tracked_width = 0, tracked_height = 0;
 };
 
 struct _GstPickDetect {
@@ -461,6 +479,22 @@ static void gst_pick_detect_set_property(GObject* object, guint prop_id, const G
     priv->calibration_path = path ? path : "";
     break;
   }
+  case PROP_TRACKING:
+    config.tracking = g_value_get_boolean(value);
+    break;
+  case PROP_TRACK_TIMEOUT:
+    config.track_timeout_ms = g_value_get_uint(value);
+    break;
+  case PROP_COUNT_LINE: {
+    const gchar* text = g_value_get_string(value);
+    try {
+      config.count_line = pickdetect::parse_count_line(text ? text : "");
+      priv->count_line = text ? text : "";
+    } catch (const std::exception& e) {
+      GST_WARNING_OBJECT(self, "count-line not changed: %s", e.what());
+    }
+    break;
+  }
   default:
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
     break;
@@ -524,6 +558,15 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
     g_value_set_string(value,
                        priv->calibration_path.empty() ? nullptr : priv->calibration_path.c_str());
     break;
+  case PROP_TRACKING:
+    g_value_set_boolean(value, config.tracking);
+    break;
+  case PROP_TRACK_TIMEOUT:
+    g_value_set_uint(value, static_cast<guint>(config.track_timeout_ms));
+    break;
+  case PROP_COUNT_LINE:
+    g_value_set_string(value, priv->count_line.empty() ? nullptr : priv->count_line.c_str());
+    break;
   default:
     G_OBJECT_WARN_INVALID_PROPERTY_ID(object, prop_id, pspec);
     break;
@@ -583,6 +626,8 @@ static void warn_heights_ignored(GstPickDetect* self) {
     }
   }
 }
+
+static void reset_tracks(GstPickDetect* self, const char* why);
 
 static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
@@ -649,6 +694,9 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
 static gboolean gst_pick_detect_stop(GstBaseTransform* trans) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
   self->priv->workers.reset(); // Drops the frames in the works, joins the frame threads.
+  reset_tracks(self, "stop");
+  self->priv->tracked_detector = nullptr;
+  self->priv->tracked_width = self->priv->tracked_height = 0;
   std::shared_ptr<const pickdetect::Detector> old;
   GST_OBJECT_LOCK(self);
   self->priv->started = false;
@@ -696,6 +744,12 @@ static gboolean gst_pick_detect_set_info(GstVideoFilter* filter, GstCaps* incaps
   GST_DEBUG_OBJECT(self, "format %s, grey from %s", GST_VIDEO_INFO_NAME(in_info),
                    format->grey_source_name());
   self->priv->format = std::move(format);
+  if (GST_VIDEO_INFO_WIDTH(in_info) != self->priv->tracked_width ||
+      GST_VIDEO_INFO_HEIGHT(in_info) != self->priv->tracked_height) {
+    reset_tracks(self, "new frame size"); // Positions mean other places now.
+    self->priv->tracked_width = GST_VIDEO_INFO_WIDTH(in_info);
+    self->priv->tracked_height = GST_VIDEO_INFO_HEIGHT(in_info);
+  }
   return TRUE;
 }
 
@@ -733,6 +787,62 @@ static void post_frame_message(GstPickDetect* self, GstStructure* structure) {
                              gst_message_new_element(GST_OBJECT(self), structure));
 }
 
+/// Posts the track and count messages gathered so far, in order. Streaming thread.
+static void post_track_messages(GstPickDetect* self) {
+  std::vector<GstStructure*> messages;
+  messages.swap(self->priv->tracking.messages);
+  for (GstStructure* s : messages)
+    post_frame_message(self, s);
+}
+
+/// Ends every track (flush, seek, new segment, new frame size, tracking off, stop) and posts
+/// their end. Streaming thread (or while it is stopped).
+static void reset_tracks(GstPickDetect* self, const char* why) {
+  GstPickDetectPrivate* priv = self->priv;
+  const std::vector<pickdetect::TrackEvent> ends =
+      priv->tracker.end_all(pickdetect::TrackEnd::Reset);
+  if (!ends.empty())
+    GST_DEBUG_OBJECT(self, "%zu tracks ended: %s", ends.size(), why);
+  for (const pickdetect::TrackEvent& e : ends)
+    priv->tracking.messages.push_back(gstpickdetect::track_structure(e));
+  priv->tracking.last_time.reset();
+  post_track_messages(self);
+}
+
+/// Brings the tracker up to the frame's settings and models; null when not tracking.
+static gstpickdetect::FrameTracking* prepare_tracking(GstPickDetect* self, const FrameInputs& in) {
+  GstPickDetectPrivate* priv = self->priv;
+  if (!in.config.tracking) {
+    if (priv->tracking_on)
+      reset_tracks(self, "tracking turned off");
+    priv->tracking_on = false;
+    return nullptr;
+  }
+  priv->tracking_on = true;
+  pickdetect::TrackerSettings settings = priv->tracker.settings();
+  settings.timeout_ms = in.config.track_timeout_ms;
+  priv->tracker.set_settings(settings);
+  const bool same_line =
+      priv->tracker_line.has_value() == in.config.count_line.has_value() &&
+      (!priv->tracker_line || (priv->tracker_line->a == in.config.count_line->a &&
+                               priv->tracker_line->b == in.config.count_line->b));
+  if (!same_line) {
+    priv->tracker.set_count_line(in.config.count_line);
+    priv->tracker_line = in.config.count_line;
+  }
+  if (priv->tracked_detector != in.detector.get()) {
+    // New models: the tracks of models still there go on, the others end.
+    std::vector<std::string> names;
+    for (const pickdetect::Model& m : in.detector->models())
+      names.push_back(m.name);
+    for (const pickdetect::TrackEvent& e : priv->tracker.end_models_not_in(names))
+      priv->tracking.messages.push_back(gstpickdetect::track_structure(e));
+    priv->tracked_detector = in.detector.get();
+  }
+  priv->tracking.tracker = &priv->tracker;
+  return &priv->tracking;
+}
+
 /// One frame: everything at once, on the streaming thread (`threads` = 1).
 static GstFlowReturn gst_pick_detect_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
@@ -740,9 +850,12 @@ static GstFlowReturn gst_pick_detect_transform_ip(GstBaseTransform* trans, GstBu
   if (!take_frame_inputs(self, in))
     return GST_FLOW_ERROR;
   GstStructure* message = nullptr;
-  const GstFlowReturn ret = gstpickdetect::process_frame(
-      GST_ELEMENT(self), buffer, *in.format, in.config, *in.detector, trans->segment, &message);
+  gstpickdetect::FrameTracking* tracking = prepare_tracking(self, in);
+  const GstFlowReturn ret =
+      gstpickdetect::process_frame(GST_ELEMENT(self), buffer, *in.format, in.config, *in.detector,
+                                   trans->segment, &message, tracking);
   post_frame_message(self, message);
+  post_track_messages(self);
   return ret;
 }
 
@@ -763,13 +876,19 @@ public:
   FrameJob& operator=(const FrameJob&) = delete;
 
   void run() override {
-    ret_ = gstpickdetect::process_frame(GST_ELEMENT(self_), buffer_, *in_.format, in_.config,
-                                        *in_.detector, segment_, &message_);
+    ret_ = gstpickdetect::detect_frame(GST_ELEMENT(self_), buffer_, *in_.format, in_.config,
+                                       *in_.detector, found_);
   }
 
-  /// Posts the frame's message and hands over the buffer (null when the frame failed).
+  /// Tracks the frame and attaches its metas (in frame order, on the streaming thread), posts
+  /// its messages and hands over the buffer (null when the frame failed).
   GstBuffer* finish(GstFlowReturn& ret) {
+    if (ret_ == GST_FLOW_OK)
+      ret_ = gstpickdetect::attach_frame(GST_ELEMENT(self_), buffer_, *in_.format, in_.config,
+                                         *in_.detector, segment_, found_, &message_,
+                                         prepare_tracking(self_, in_));
     post_frame_message(self_, message_);
+    post_track_messages(self_);
     message_ = nullptr;
     ret = ret_;
     GstBuffer* out = ret_ == GST_FLOW_OK ? buffer_ : nullptr;
@@ -784,6 +903,7 @@ private:
   FrameInputs in_;
   GstSegment segment_;
   GstStructure* message_ = nullptr;
+  gstpickdetect::FrameDetection found_;
   GstFlowReturn ret_ = GST_FLOW_OK;
 };
 
@@ -865,6 +985,7 @@ static gboolean gst_pick_detect_sink_event(GstBaseTransform* trans, GstEvent* ev
   case GST_EVENT_FLUSH_STOP:
     discard_frames(self);
     self->priv->drain_ret = GST_FLOW_OK;
+    reset_tracks(self, "flush");
     break;
   default:
     if (GST_EVENT_IS_SERIALIZED(event)) {
@@ -872,6 +993,8 @@ static gboolean gst_pick_detect_sink_event(GstBaseTransform* trans, GstEvent* ev
       if (ret != GST_FLOW_OK && self->priv->drain_ret == GST_FLOW_OK)
         self->priv->drain_ret = ret;
     }
+    if (GST_EVENT_TYPE(event) == GST_EVENT_SEGMENT)
+      reset_tracks(self, "new segment"); // Running times start again.
     break;
   }
   return GST_BASE_TRANSFORM_CLASS(parent_class)->sink_event(trans, event);
@@ -1068,6 +1191,33 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
           DEFAULT_CALIBRATION,
           static_cast<GParamFlags>(G_PARAM_READWRITE | G_PARAM_STATIC_STRINGS |
                                    GST_PARAM_MUTABLE_READY)));
+
+  g_object_class_install_property(
+      gobject_class, PROP_TRACKING,
+      g_param_spec_boolean(
+          "tracking", "Tracking",
+          "Follow every instance across the frames of the stream: each gets a track-id (also the "
+          "ROI's id and an object_id param), first-seen, frames-seen, velocity-x/-y and tracked "
+          "(carried forward, not detected in this frame); \"pickdetect-track\" messages when a "
+          "track starts and ends, the belt's motion in the frame message and meta. Off: each "
+          "frame on its own (unrelated still pictures). Turned off while playing, every track "
+          "ends",
+          DEFAULT_TRACKING, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_TRACK_TIMEOUT,
+      g_param_spec_uint("track-timeout", "Track timeout",
+                        "Milliseconds a tracked object may go unseen (hidden, missed) and keep its "
+                        "id when it shows again where its motion says; then its track ends",
+                        0, 600000, DEFAULT_TRACK_TIMEOUT, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_COUNT_LINE,
+      g_param_spec_string(
+          "count-line", "Count line",
+          "A segment \"x1,y1,x2,y2\" in frame pixels: each track crossing it is counted once "
+          "(a \"pickdetect-count\" message with track-id, model, count of that model and total), "
+          "however it stops, jitters or hides on it. Empty: no counting. A new line starts the "
+          "counts again; a malformed one is refused with a warning in the log",
+          DEFAULT_COUNT_LINE, flags));
 
   gst_element_class_set_static_metadata(
       element_class, "Pick detection", "Filter/Analyzer/Video",

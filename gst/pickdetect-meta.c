@@ -63,6 +63,8 @@ static void instance_scale(GstPickDetectInstance* instance, gdouble sx, gdouble 
     instance->outline[i].x *= sx;
     instance->outline[i].y *= sy;
   }
+  instance->velocity_x *= sx;
+  instance->velocity_y *= sy;
   instance->angle = stretch_angle(instance->angle, sx, sy);
   instance->grasp_angle = stretch_angle(instance->grasp_angle, sx, sy);
   instance->scale *= sqrt(sx * sy);
@@ -74,6 +76,9 @@ static gboolean gst_pickdetect_meta_init(GstMeta* meta, gpointer params, GstBuff
   GstPickDetectMeta* pmeta = (GstPickDetectMeta*)meta;
   pmeta->n_instances = 0;
   pmeta->instances = NULL;
+  pmeta->has_motion = FALSE;
+  pmeta->motion_x = 0.0;
+  pmeta->motion_y = 0.0;
   return TRUE;
 }
 
@@ -111,6 +116,9 @@ static gboolean gst_pickdetect_meta_transform(GstBuffer* dest, GstMeta* meta, Gs
   GstPickDetectMeta* out = gst_buffer_add_pickdetect_meta(dest);
   if (!out)
     return FALSE;
+  out->has_motion = src->has_motion;
+  out->motion_x = src->motion_x * sx;
+  out->motion_y = src->motion_y * sy;
   for (guint i = 0; i < src->n_instances; i++) {
     GstPickDetectInstance* copy =
         (GstPickDetectInstance*)gst_pickdetect_meta_add_instance(out, &src->instances[i]);

@@ -12,4 +12,5 @@
 #include <pickdetect/occlusion.hpp>
 #include <pickdetect/pose.hpp>
 #include <pickdetect/ransac.hpp>
+#include <pickdetect/tracker.hpp>
 #include <pickdetect/voting.hpp>

@@ -345,6 +345,16 @@ static void check_structure_matches(const GstStructure* s, const GstPickDetectIn
 }
 
 // The custom meta, the ROI metas and the bus message all tell the same instances.
+/// The next "pickdetect" frame message on the bus, passing over the track and count messages.
+static GstMessage* pop_frame_message(GstBus* bus) {
+  while (GstMessage* msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT)) {
+    if (gst_structure_has_name(gst_message_get_structure(msg), "pickdetect"))
+      return msg;
+    gst_message_unref(msg);
+  }
+  return nullptr;
+}
+
 GST_START_TEST(test_meta_roi_message) {
   const cv::Size size(640, 480);
   std::vector<Truth> truth;
@@ -417,7 +427,7 @@ GST_START_TEST(test_meta_roi_message) {
   fail_unless_equals_int(n_roi, meta->n_instances);
 
   // The bus message.
-  GstMessage* msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT);
+  GstMessage* msg = pop_frame_message(bus);
   fail_unless(msg != nullptr, "no element message");
   const GstStructure* s = gst_message_get_structure(msg);
   fail_unless(gst_structure_has_name(s, "pickdetect"));
@@ -441,7 +451,7 @@ GST_START_TEST(test_meta_roi_message) {
   fail_unless(meta != nullptr);
   fail_unless_equals_int(gst_pickdetect_meta_get_n_instances(meta), 0);
   fail_unless(gst_buffer_get_video_region_of_interest_meta(out) == nullptr);
-  msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT);
+  msg = pop_frame_message(bus);
   fail_unless(msg != nullptr);
   fail_unless_equals_int(
       gst_value_list_get_size(gst_structure_get_value(gst_message_get_structure(msg), "instances")),
@@ -452,7 +462,7 @@ GST_START_TEST(test_meta_roi_message) {
   // post-messages=false: no message.
   g_object_set(h->element, "post-messages", FALSE, nullptr);
   gst_buffer_unref(gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8")));
-  fail_unless(gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT) == nullptr);
+  fail_unless(pop_frame_message(bus) == nullptr);
 
   // Settings changed while playing apply from the next frame on.
   g_object_set(h->element, "max-instances", 1, nullptr);
@@ -818,7 +828,7 @@ GST_START_TEST(test_look_alike_models) {
       n_roi++;
     }
     fail_unless_equals_int(n_roi, 2);
-    GstMessage* msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT);
+    GstMessage* msg = pop_frame_message(bus);
     fail_unless(msg != nullptr);
     const GValue* list = gst_structure_get_value(gst_message_get_structure(msg), "instances");
     fail_unless_equals_int(gst_value_list_get_size(list), 2);

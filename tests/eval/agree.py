@@ -14,6 +14,8 @@ import sys
 KEYS = ["object_precision", "object_recall", "pixel_precision", "pixel_recall",
         "center_mean_px", "center_p95_px", "points_mean_px", "pick_precision", "pick_recall",
         "tp", "fp", "fn", "ms_per_frame"]
+TRACKING_KEYS = ["mota", "idf1", "id_switches", "fragmented", "ghosts", "objects_present",
+                 "objects_counted", "required", "detections", "fn", "fp", "idtp"]
 TOLERANCE = 1e-6
 
 
@@ -66,6 +68,13 @@ def main():
         compare(a["center_mean_px"], b["center_mean_px"], "paired_centers", problems,
                 keys=sorted(set(a["center_mean_px"]) | set(b["center_mean_px"])))
         compared += 1
+    for method in sorted(set(cpp["methods"]) & set(py["methods"])):
+        a, b = cpp["methods"][method].get("tracking"), py["methods"][method].get("tracking")
+        if (a is None) != (b is None):
+            problems.append("%s.tracking: in one report only" % method)
+        elif a is not None:
+            compare(a, b, method + ".tracking", problems, keys=TRACKING_KEYS)
+            compared += 1
     for p in problems:
         print("DISAGREE " + p)
     if compared == 0:

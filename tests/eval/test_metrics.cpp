@@ -3,6 +3,7 @@
 #include "dataset.hpp"
 #include "geometry.hpp"
 #include "metrics.hpp"
+#include "tracking.hpp"
 
 #include <gtest/gtest.h>
 
@@ -458,4 +459,81 @@ TEST(Geometry, SelfCrossingOutlinesCountAsTheirHull) {
   EXPECT_DOUBLE_EQ(frame_overlap(bow, rect(0, 0, 10, 10), 100, 100).iou(), 1.0);
   // Collinear points drop out of the hull.
   EXPECT_EQ(convex_hull({{0, 0}, {5, 0}, {10, 0}, {10, 10}, {0, 10}}).size(), 4u);
+}
+
+namespace {
+
+/// A sequence of `frames` frames of one model: object 1 rides right 10 px a frame, object 2
+/// stands still; `dets(f)` gives frame f's detections.
+template <typename Detections>
+std::pair<Dataset, std::map<size_t, std::vector<DetectedInstance>>> two_objects(int frames,
+                                                                                Detections dets) {
+  Dataset ds = one_model(400, 300, {});
+  ds.fps = 30.0;
+  ds.scenes.clear();
+  std::map<size_t, std::vector<DetectedInstance>> out;
+  for (int f = 0; f < frames; ++f) {
+    Scene s;
+    s.image = "scenes/" + std::to_string(f) + ".png";
+    s.width = 400;
+    s.height = 300;
+    TrueInstance a = truth("box", rect(10 + 10 * f, 10, 50 + 10 * f, 50), 1.0);
+    a.track = 1;
+    TrueInstance b = truth("box", rect(200, 200, 240, 240), 1.0);
+    b.track = 2;
+    s.instances = {a, b};
+    ds.scenes.push_back(s);
+    out[static_cast<size_t>(f)] = dets(f, s);
+  }
+  return {ds, out};
+}
+
+DetectedInstance with_track(DetectedInstance d, std::optional<long long> id) {
+  d.track = id;
+  return d;
+}
+
+} // namespace
+
+TEST(Tracking, PerfectTracksScoreOne) {
+  auto [ds, dets] = two_objects(8, [](int, const Scene& s) {
+    return std::vector<DetectedInstance>{with_track(detection("box", s.instances[0].polygon), 7),
+                                         with_track(detection("box", s.instances[1].polygon), 9)};
+  });
+  const TrackingSummary t = score_tracking(ds, dets);
+  ASSERT_TRUE(t.mota && t.idf1);
+  EXPECT_DOUBLE_EQ(*t.mota, 1.0);
+  EXPECT_DOUBLE_EQ(*t.idf1, 1.0);
+  EXPECT_EQ(t.id_switches, 0);
+  EXPECT_EQ(t.fragmented, 0);
+  EXPECT_EQ(t.ghosts, 0);
+  EXPECT_EQ(t.objects_present, 2);
+  EXPECT_EQ(t.objects_counted, 2);
+}
+
+TEST(Tracking, ASwitchFragmentsTheObjectAndCostsMotaAndIdf1) {
+  // Object 1 under id 7 for frames 0-2, then id 8 for frames 3-7; a false box with id 50 in
+  // frames 0-5 is a ghost; object 2 is missed in frame 4 and has no id in frame 6.
+  auto [ds, dets] = two_objects(8, [](int f, const Scene& s) {
+    std::vector<DetectedInstance> d = {
+        with_track(detection("box", s.instances[0].polygon), f < 3 ? 7 : 8)};
+    if (f != 4)
+      d.push_back(with_track(detection("box", s.instances[1].polygon),
+                             f == 6 ? std::nullopt : std::optional<long long>(9)));
+    if (f < 6)
+      d.push_back(with_track(detection("box", rect(300, 20, 340, 60)), 50));
+    return d;
+  });
+  const TrackingSummary t = score_tracking(ds, dets);
+  EXPECT_EQ(t.required, 16);
+  EXPECT_EQ(t.fn, 1);
+  EXPECT_EQ(t.fp, 6);
+  EXPECT_EQ(t.id_switches, 3) << "7 -> 8, 9 -> none, none -> 9";
+  EXPECT_EQ(t.detections, 15 + 6);
+  EXPECT_EQ(t.idtp, 5 + 6) << "object 1 with id 8 (5 frames), object 2 with id 9 (6 frames)";
+  EXPECT_NEAR(*t.mota, 1.0 - 10.0 / 16.0, 1e-12);
+  EXPECT_NEAR(*t.idf1, 22.0 / 37.0, 1e-12);
+  EXPECT_EQ(t.fragmented, 1);
+  EXPECT_EQ(t.ghosts, 1);
+  EXPECT_EQ(t.objects_counted, 2);
 }

@@ -21,7 +21,9 @@
 #include <opencv2/videoio.hpp>
 
 #include <cmath>
+#include <algorithm>
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -681,5 +683,69 @@ TEST_F(Synth, GlareClipsOnInstancesWithoutChangingTheTruth) {
       cv::fillPoly(on, std::vector<std::vector<cv::Point>>{pts}, cv::Scalar(255));
     }
     EXPECT_GT(cv::countNonZero(clipped & on), 0.9 * added) << scene.image;
+  }
+}
+
+TEST_F(Synth, ConveyorSequenceKeepsEachObjectsTrackAndSpeed) {
+  ASSERT_EQ(synth({"--sequence", "conveyor", "--speed", "25", "--scenes", "30", "--size", "640x480",
+                   "--scale", "0.3-0.35", "--riders", "1", "--format", "png", "--out", path("belt"),
+                   picture("box.png"), picture("opencv-logo.png")}),
+            0)
+      << stderr_;
+  const Dataset ds = load_dataset(path("belt"));
+  ASSERT_TRUE(ds.fps.has_value());
+  EXPECT_DOUBLE_EQ(*ds.fps, 30.0);
+  ASSERT_EQ(ds.scenes.size(), 30u);
+  std::map<long long, std::pair<std::string, Point>> last; // track -> model, centre
+  std::set<long long> tracks;
+  int moved = 0, covered = 0;
+  for (size_t f = 0; f < ds.scenes.size(); ++f) {
+    std::set<long long> here;
+    for (const TrueInstance& t : ds.scenes[f].instances) {
+      ASSERT_TRUE(t.track.has_value());
+      EXPECT_TRUE(here.insert(*t.track).second) << "track " << *t.track << " twice in frame " << f;
+      tracks.insert(*t.track);
+      covered += *t.covered > 0.05 ? 1 : 0;
+      auto it = last.find(*t.track);
+      if (it != last.end() && f > 0) {
+        EXPECT_EQ(it->second.first, t.model) << "track " << *t.track << " changed model";
+        EXPECT_NEAR(t.points[0].x - it->second.second.x, 25.0, 1e-3) << "track " << *t.track;
+        EXPECT_NEAR(t.points[0].y, it->second.second.y, 1e-3);
+        ++moved;
+      }
+      last[*t.track] = {t.model, t.points[0]};
+    }
+  }
+  EXPECT_GT(moved, 10);
+  EXPECT_GT(covered, 0) << "some objects ride partly on others";
+  EXPECT_GT(tracks.size(), 3u);
+}
+
+TEST_F(Synth, BinSequenceTakesTheTopFreeObjectAway) {
+  ASSERT_EQ(synth({"--sequence", "bin", "--pick-every", "4", "--scenes", "13", "--size", "640x480",
+                   "--instances", "6-6", "--scale", "0.3-0.35", "--format", "png", "--out",
+                   path("bin"), picture("box.png"), picture("opencv-logo.png")}),
+            0)
+      << stderr_;
+  const Dataset ds = load_dataset(path("bin"));
+  ASSERT_EQ(ds.scenes.size(), 13u);
+  for (size_t f = 1; f < ds.scenes.size(); ++f) {
+    const std::vector<TrueInstance>& before = ds.scenes[f - 1].instances;
+    const std::vector<TrueInstance>& now = ds.scenes[f].instances;
+    const size_t taken = f % 4 == 0 ? 1 : 0;
+    ASSERT_EQ(now.size() + taken, before.size()) << "frame " << f;
+    for (const TrueInstance& t : before) {
+      const bool kept = std::any_of(now.begin(), now.end(),
+                                    [&](const TrueInstance& n) { return n.track == t.track; });
+      if (!kept) {
+        EXPECT_LT(*t.covered, 0.02) << "frame " << f << ": a covered object was taken";
+      }
+    }
+    for (const TrueInstance& n : now) {
+      const auto same = std::find_if(before.begin(), before.end(),
+                                     [&](const TrueInstance& t) { return t.track == n.track; });
+      ASSERT_NE(same, before.end());
+      EXPECT_NEAR(n.points[0].x, same->points[0].x, 1e-9) << "a bin stands still";
+    }
   }
 }

@@ -193,6 +193,8 @@ DetectedInstance parse_detected(const Reader& r, JsonNode* node, const std::stri
     d.matches = r.integer(n, Reader::join(field, "matches"));
   if (JsonNode* n = Reader::member(o, "pickable"))
     d.pickable = r.boolean(n, Reader::join(field, "pickable"));
+  if (JsonNode* n = Reader::member(o, "track"))
+    d.track = static_cast<long long>(r.number(n, Reader::join(field, "track")));
   return d;
 }
 
@@ -241,6 +243,12 @@ Dataset parse_dataset(const std::string& text, const std::string& origin, const 
     gchar* base = g_path_get_basename(dir.c_str());
     ds.name = base;
     g_free(base);
+  }
+
+  if (JsonNode* n = Reader::member(root, "fps")) {
+    ds.fps = r.number(n, "fps");
+    if (!(*ds.fps > 0.0))
+      r.fail("fps", "must be positive");
   }
 
   JsonObject* models = r.object(r.required(root, "models", ""), "models");
@@ -309,6 +317,10 @@ Dataset parse_dataset(const std::string& text, const std::string& origin, const 
         t.scale = r.number(n, f + ".scale");
       if (JsonNode* n = Reader::member(o, "tilt"))
         t.tilt = r.number(n, f + ".tilt");
+      if (JsonNode* n = Reader::member(o, "track"))
+        t.track = r.integer(n, f + ".track");
+      else if (ds.fps)
+        r.fail(f + ".track", "missing (a video sequence, with fps, gives every instance one)");
       scene.instances.push_back(std::move(t));
     }
     ds.scenes.push_back(std::move(scene));
@@ -411,6 +423,10 @@ std::string detections_line(const SceneDetections& scene) {
     json_builder_add_int_value(b.get(), d.matches);
     json_builder_set_member_name(b.get(), "pickable");
     json_builder_add_boolean_value(b.get(), d.pickable);
+    if (d.track) {
+      json_builder_set_member_name(b.get(), "track");
+      json_builder_add_int_value(b.get(), *d.track);
+    }
     json_builder_end_object(b.get());
   }
   json_builder_end_array(b.get());

@@ -35,6 +35,8 @@ struct TrueInstance {
   std::optional<double> in_frame;
   std::optional<int> z;
   std::optional<double> angle, scale, tilt;
+  /// Video sequences: the identity of the physical object, the same in every frame.
+  std::optional<long long> track;
 };
 
 struct Scene {
@@ -50,6 +52,9 @@ struct Dataset {
   std::string file;              ///< Path of dataset.json.
   std::vector<ModelInfo> models; ///< In the file's order.
   std::vector<Scene> scenes;
+  /// Video sequences (FORMAT.md): frames per second; the scenes are the frames, in order, and
+  /// every instance has its `track`.
+  std::optional<double> fps;
 
   const ModelInfo* find_model(const std::string& name) const;
   /// dir joined with a path from the file (kept as is when absolute).
@@ -70,6 +75,7 @@ struct DetectedInstance {
   double score = 0.0;
   int matches = 0;
   bool pickable = false;
+  std::optional<long long> track; ///< The element's track id, when it tracks.
 };
 
 /// One line of a detections file: the detections in one scene (by one method).

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #include "metrics.hpp"
 
+#include "tracking.hpp"
+
 #include <json-glib/json-glib.h>
 
 #include <algorithm>
@@ -212,6 +214,10 @@ void Scorer::add_scene(size_t scene_index, const std::vector<DetectedInstance>& 
   const double w = scene.width, h = scene.height;
   const bool pick_known = scene_covered_known(scene);
   const std::vector<Pairing> pairs = match_scene(scene, detected, model);
+  std::vector<DetectedInstance>& kept = detections_[scene_index];
+  for (const DetectedInstance& det : detected)
+    if (det.model == model)
+      kept.push_back(det);
 
   std::vector<int> paired_detection(scene.instances.size(), -1);
   for (size_t d = 0; d < detected.size(); ++d) {
@@ -357,6 +363,36 @@ std::string summary_json(const Summary& s, int indent) {
   return out;
 }
 
+namespace {
+
+void add_tracking(JsonBuilder* b, const TrackingSummary& t) {
+  json_builder_set_member_name(b, "tracking");
+  json_builder_begin_object(b);
+  for (const auto& [key, v] : {std::pair{"mota", t.mota}, {"idf1", t.idf1}}) {
+    json_builder_set_member_name(b, key);
+    if (v)
+      json_builder_add_double_value(b, *v);
+    else
+      json_builder_add_null_value(b);
+  }
+  for (const auto& [key, v] : {std::pair{"id_switches", t.id_switches},
+                               {"fragmented", t.fragmented},
+                               {"ghosts", t.ghosts},
+                               {"objects_present", t.objects_present},
+                               {"objects_counted", t.objects_counted},
+                               {"required", t.required},
+                               {"detections", t.detections},
+                               {"fn", t.fn},
+                               {"fp", t.fp},
+                               {"idtp", t.idtp}}) {
+    json_builder_set_member_name(b, key);
+    json_builder_add_int_value(b, v);
+  }
+  json_builder_end_object(b);
+}
+
+} // namespace
+
 std::string report_json(const Dataset& dataset, const std::map<std::string, Scorer>& scorers) {
   JsonBuilder* b = json_builder_new();
   json_builder_begin_object(b);
@@ -377,6 +413,8 @@ std::string report_json(const Dataset& dataset, const std::map<std::string, Scor
       add_summary(b, s.model_summary(m.name));
     }
     json_builder_end_object(b);
+    if (dataset.fps)
+      add_tracking(b, score_tracking(dataset, s.detections()));
     json_builder_end_object(b);
   }
   json_builder_end_object(b);
@@ -462,6 +500,17 @@ std::string report_table(const Dataset& dataset, const std::map<std::string, Sco
           << (method == methods.back() ? "." : ",");
     }
     out << "\n";
+  }
+  if (dataset.fps) {
+    out << "\nTracking (" << dataset.scenes.size() << " frames at " << *dataset.fps << " fps):\n";
+    for (const std::string& method : methods) {
+      const TrackingSummary t = score_tracking(dataset, scorers.at(method).detections());
+      auto num = [](const std::optional<double>& v) { return v ? fixed3(*v) : std::string("-"); };
+      out << "  " << (method.empty() ? "detections" : method) << ": MOTA " << num(t.mota)
+          << ", IDF1 " << num(t.idf1) << ", identity switches " << t.id_switches << ", fragmented "
+          << t.fragmented << ", ghost ids " << t.ghosts << ", objects counted " << t.objects_counted
+          << " of " << t.objects_present << " present\n";
+    }
   }
   return out.str();
 }

@@ -94,12 +94,15 @@ public:
   const std::map<std::pair<size_t, size_t>, double>& center_errors() const {
     return center_by_truth_;
   }
+  /// Every detection scored, per scene (for the tracking figures of a sequence).
+  const std::map<size_t, std::vector<DetectedInstance>>& detections() const { return detections_; }
 
 private:
   const Dataset& dataset_;
   std::map<std::string, Tally> tallies_;
   std::map<std::pair<size_t, size_t>, double> center_by_truth_;
   std::map<size_t, double> frame_ms_; ///< Scene -> time summed over models.
+  std::map<size_t, std::vector<DetectedInstance>> detections_;
 };
 
 /// Centre errors compared on the same instances: the mean per method over the true instances
@@ -120,7 +123,8 @@ std::map<std::string, Scorer> score_detections(const Dataset& dataset,
 std::string summary_json(const Summary& s, int indent = 0);
 
 /// A JSON document with per model and overall figures for each method:
-/// {"dataset": NAME, "methods": {METHOD: {"overall": {...}, "models": {MODEL: {...}}}}}
+/// {"dataset": NAME, "methods": {METHOD: {"overall": {...}, "models": {MODEL: {...}}}}};
+/// a video sequence (fps) adds "tracking" to each method (tracking.hpp's figures).
 std::string report_json(const Dataset& dataset, const std::map<std::string, Scorer>& scorers);
 
 /// A table shaped like the paper's Table 1, one row per model and method, then overall rows.

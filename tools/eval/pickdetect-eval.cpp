@@ -394,6 +394,8 @@ int run(int argc, char** argv) {
                                                                     {"method", method}};
           props.insert(props.end(), properties.begin(), properties.end());
           ElementRunner runner(props);
+          if (dataset.fps) // A video sequence: one stream, timestamps at its frame rate.
+            runner.set_fps(*dataset.fps);
           for (size_t i = 0; i < frames.size(); ++i) {
             FrameResult r = runner.process(frames[i]);
             for (const DetectedInstance& d : r.instances) {

@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
 #include <cstring>
 
 namespace pickdetect::eval {
@@ -98,6 +99,8 @@ std::vector<DetectedInstance> from_pickdetect_meta(const GstPickDetectMeta* meta
     d.score = in->score;
     d.matches = in->matches;
     d.pickable = in->pickable;
+    if (in->track_id > 0)
+      d.track = static_cast<long long>(in->track_id);
     out.push_back(std::move(d));
   }
   return out;
@@ -176,6 +179,7 @@ struct ElementRunner::Impl {
   GstElement* sink = nullptr;
   GstCaps* caps = nullptr;
   guint64 frames = 0;
+  double fps = 0.0; ///< A video sequence's; 0: one frame a second, no frame rate in the caps.
 };
 
 ElementRunner::ElementRunner(const std::vector<std::pair<std::string, std::string>>& properties)
@@ -276,6 +280,10 @@ void ElementRunner::check_bus(const std::string& context) {
   throw RunError(context + ": " + message);
 }
 
+void ElementRunner::set_fps(double fps) {
+  impl_->fps = fps;
+}
+
 FrameResult ElementRunner::process(const Frame& frame) {
   const char* format = frame.bgr ? "BGR" : "GRAY8";
   if (!impl_->caps || [&] {
@@ -288,9 +296,11 @@ FrameResult ElementRunner::process(const Frame& frame) {
       }()) {
     if (impl_->caps)
       gst_caps_unref(impl_->caps);
-    impl_->caps = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, format, "width",
-                                      G_TYPE_INT, frame.width, "height", G_TYPE_INT, frame.height,
-                                      "framerate", GST_TYPE_FRACTION, 0, 1, nullptr);
+    impl_->caps = gst_caps_new_simple(
+        "video/x-raw", "format", G_TYPE_STRING, format, "width", G_TYPE_INT, frame.width, "height",
+        G_TYPE_INT, frame.height, "framerate", GST_TYPE_FRACTION,
+        impl_->fps > 0 ? static_cast<int>(std::lround(impl_->fps * 1000)) : 0,
+        impl_->fps > 0 ? 1000 : 1, nullptr);
   }
   // GStreamer's default row stride is rounded up to 4 bytes.
   GstVideoInfo info;
@@ -304,8 +314,10 @@ FrameResult ElementRunner::process(const Frame& frame) {
     std::memcpy(map.data + stride * static_cast<size_t>(y),
                 frame.pixels.data() + row * static_cast<size_t>(y), row);
   gst_buffer_unmap(buffer, &map);
-  GST_BUFFER_PTS(buffer) = impl_->frames * GST_SECOND;
-  GST_BUFFER_DURATION(buffer) = GST_SECOND;
+  const GstClockTime frame_time =
+      impl_->fps > 0 ? static_cast<GstClockTime>(GST_SECOND / impl_->fps) : GST_SECOND;
+  GST_BUFFER_PTS(buffer) = impl_->frames * frame_time;
+  GST_BUFFER_DURATION(buffer) = frame_time;
   ++impl_->frames;
   GstSample* in = gst_sample_new(buffer, impl_->caps, nullptr, nullptr);
   gst_buffer_unref(buffer);

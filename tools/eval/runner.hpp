@@ -51,6 +51,9 @@ public:
   ElementRunner(const ElementRunner&) = delete;
   ElementRunner& operator=(const ElementRunner&) = delete;
 
+  /// The frames are those of one video at `fps` (timestamps and caps follow it), before the
+  /// first frame.
+  void set_fps(double fps);
   /// Pushes one frame and waits for it to come out of the element.
   FrameResult process(const Frame& frame);
 

@@ -213,7 +213,11 @@ def load_dataset(path):
     if not isinstance(models, dict) or not models:
         raise FormatError("%s: models: expected a non-empty object" % path)
     ds = {"name": doc.get("name", os.path.basename(os.path.dirname(os.path.abspath(path)))),
-          "models": {}, "model_order": list(models), "scenes": []}
+          "models": {}, "model_order": list(models), "scenes": [], "fps": None}
+    if "fps" in doc:
+        ds["fps"] = number(doc["fps"], "fps", path)
+        if not ds["fps"] > 0:
+            raise FormatError("%s: fps: must be positive" % path)
     for name, m in models.items():
         w = "models." + name
         ds["models"][name] = {
@@ -243,6 +247,10 @@ def load_dataset(path):
                     "covered": None}
             if "covered" in t:
                 inst["covered"] = number(t["covered"], wi + ".covered", path)
+            inst["track"] = t.get("track")
+            if ds["fps"] is not None and inst["track"] is None:
+                raise FormatError("%s: %s.track: missing (a video sequence, with fps, gives every "
+                                  "instance one)" % (path, wi))
             scene["instances"].append(inst)
         ds["scenes"].append(scene)
     return ds
@@ -266,7 +274,8 @@ def load_detections(path):
                     "model": need(d, "model", w, origin),
                     "points": points(need(d, "points", w, origin), w + ".points", origin, 1),
                     "polygon": points(need(d, "polygon", w, origin), w + ".polygon", origin, 3),
-                    "pickable": bool(d.get("pickable", False))})
+                    "pickable": bool(d.get("pickable", False)),
+                    "track": int(d["track"]) if d.get("track") is not None else None})
             lines.append({"image": need(doc, "image", "", origin),
                           "method": doc.get("method", ""),
                           "ms": {k: float(v) for k, v in doc.get("ms", {}).items()},
@@ -340,6 +349,92 @@ def score_scene(tally, scene, dets, model, centers_by_truth):
                 tally["pick_found"] += 1
 
 
+def pair_detections(scene, dets, model):
+    """Detection index -> true instance index, FORMAT.md's per-frame pairing for one model."""
+    w, h = scene["width"], scene["height"]
+    cands = []
+    for di, d in enumerate(dets):
+        if d["model"] != model:
+            continue
+        for gi, g in enumerate(scene["instances"]):
+            if g["model"] == model:
+                v = iou(*overlap(d["polygon"], g["polygon"], w, h))
+                if v >= MATCH_IOU:
+                    cands.append((-v, di, gi))
+    cands.sort()
+    det_pair, taken = {}, set()
+    for _, di, gi in cands:
+        if di not in det_pair and gi not in taken:
+            det_pair[di] = gi
+            taken.add(gi)
+    return det_pair
+
+
+TRACK_MIN_FRAMES = 5
+
+
+def score_tracking(ds, by_scene):
+    """FORMAT.md's tracking figures of a video sequence (choices as tracking.hpp's)."""
+    required = detections = fn = fp = switches = 0
+    last, ids_of, req_frames, shared, id_frames = {}, {}, {}, {}, {}
+    for si, scene in enumerate(ds["scenes"]):
+        dets = by_scene.get(si, {"instances": []})["instances"]
+        for i in {d["track"] for d in dets if d["track"] is not None}:
+            id_frames[i] = id_frames.get(i, 0) + 1
+        paired = set()
+        for m in ds["model_order"]:
+            for di, gi in sorted(pair_detections(scene, dets, m).items()):
+                g = scene["instances"][gi]
+                if g["visible"] < DONT_CARE_VISIBLE:
+                    continue
+                paired.add(gi)
+                obj, tid = g["track"], dets[di]["track"]
+                if obj in last and last[obj] != tid:
+                    switches += 1
+                last[obj] = tid
+                if tid is not None:
+                    ids_of.setdefault(obj, set()).add(tid)
+                    shared[(obj, tid)] = shared.get((obj, tid), 0) + 1
+            n_model = sum(1 for d in dets if d["model"] == m)
+            n_paired = len(pair_detections(scene, dets, m))
+            fp += n_model - n_paired
+        detections += fp_scene_free(scene, dets, ds)
+        for gi, g in enumerate(scene["instances"]):
+            if g["visible"] < DONT_CARE_VISIBLE:
+                continue
+            required += 1
+            req_frames[g["track"]] = req_frames.get(g["track"], 0) + 1
+            if gi not in paired:
+                fn += 1
+    idtp, objs, ids = 0, set(), set()
+    for (obj, tid), n in sorted(shared.items(), key=lambda kv: (-kv[1], kv[0][0], kv[0][1])):
+        if obj not in objs and tid not in ids:
+            objs.add(obj)
+            ids.add(tid)
+            idtp += n
+    present = [o for o, n in req_frames.items() if n >= TRACK_MIN_FRAMES]
+    return {"mota": 1 - (fn + fp + switches) / required if required else None,
+            "idf1": 2 * idtp / (required + detections) if required + detections else None,
+            "id_switches": switches,
+            "fragmented": sum(1 for o in present if len(ids_of.get(o, ())) > 1),
+            "ghosts": sum(1 for i, n in id_frames.items() if n >= TRACK_MIN_FRAMES and i not in ids),
+            "objects_present": len(present),
+            "objects_counted": sum(1 for o in present if o in objs),
+            "required": required, "detections": detections, "fn": fn, "fp": fp, "idtp": idtp}
+
+
+def fp_scene_free(scene, dets, ds):
+    """The detections of a frame that count: those not paired with a don't-care instance."""
+    n = 0
+    for m in ds["model_order"]:
+        pairs = pair_detections(scene, dets, m)
+        for di, d in enumerate(dets):
+            if d["model"] == m and (di not in pairs or
+                                    scene["instances"][pairs[di]]["visible"] >= DONT_CARE_VISIBLE):
+                n += 1
+    return n
+
+
 def div(a, b):
     return a / b if b > 0 else None
 
@@ -411,6 +506,8 @@ def score(ds, lines, only_method=None):
         report["methods"][method] = {
             "overall": summarise(pooled),
             "models": {m: summarise(tallies[m]) for m in ds["model_order"]}}
+        if ds["fps"] is not None:
+            report["methods"][method]["tracking"] = score_tracking(ds, by_scene)
     if len(centers) > 1:
         # Centre errors on the same instances: those every method found.
         common = set.intersection(*(set(c) for c in centers.values()))

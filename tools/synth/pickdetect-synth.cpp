@@ -5,6 +5,7 @@
 //
 //   pickdetect-synth --scenes 20 --out data box.png
 //   pickdetect-synth --video belt.avi --scenes 100 --out belt-frames pack.png flyer.png
+//   pickdetect-synth --sequence conveyor --speed 25 --scenes 150 --out belt25 pack.png flyer.png
 //
 // Ground truth is exact with respect to the rendering: each instance is drawn through one
 // homography, whose images of the model's principal points and outline are the annotations;
@@ -22,7 +23,7 @@
 // products printed on several faces; --glare for specular patches that clip.
 //
 // Pieces: synth.hpp (types), models.cpp, scene.cpp (floors, placement, rendering), packed.cpp,
-// camera.cpp, glare.cpp.
+// camera.cpp, glare.cpp, sequence.cpp (--sequence: video sequences with a track per object).
 #include "synth.hpp"
 
 #include <glib.h>
@@ -120,7 +121,12 @@ int run(int argc, char** argv) {
   gchar* format = nullptr;
   gchar* name = nullptr;
   gdouble tilt = 8.0;
-  gdouble fps = 10.0;
+  gdouble fps = 0.0;
+  gchar* sequence = nullptr;
+  gdouble speed = 12.0;
+  gdouble riders = 0.25;
+  gdouble exposure = 0.5;
+  gint pick_every = 15;
   gdouble family = 0.0;
   gint64 seed = 1;
   gint distractors = 3;
@@ -190,7 +196,25 @@ int run(int argc, char** argv) {
        "Write a conveyor clip (MJPEG AVI) instead of independent scenes; with --out its frames "
        "are annotated too",
        "FILE"},
-      {"fps", 0, 0, G_OPTION_ARG_DOUBLE, &fps, "Frames per second of the clip (10)", "FPS"},
+      {"fps", 0, 0, G_OPTION_ARG_DOUBLE, &fps,
+       "Frames per second of the clip (10) or the sequence (30)", "FPS"},
+      {"sequence", 0, 0, G_OPTION_ARG_STRING, &sequence,
+       "Write the frames of one video (FORMAT.md's video sequence: fps, a track per instance): "
+       "conveyor (lanes riding right, arrivals from the left) or bin (a still heap whose top "
+       "free object is taken away every --pick-every frames); --scenes frames",
+       "KIND"},
+      {"speed", 0, 0, G_OPTION_ARG_DOUBLE, &speed, "Sequence: belt speed in pixels per frame (12)",
+       "PX"},
+      {"riders", 0, 0, G_OPTION_ARG_DOUBLE, &riders,
+       "Sequence: share of the belt's objects with another lying partly on them and riding "
+       "with them (0.25)",
+       "SHARE"},
+      {"exposure", 0, 0, G_OPTION_ARG_DOUBLE, &exposure,
+       "Sequence: share of the frame time the shutter is open: motion blur of speed x SHARE "
+       "pixels along the belt (0.5)",
+       "SHARE"},
+      {"pick-every", 0, 0, G_OPTION_ARG_INT, &pick_every,
+       "Bin sequence: the top free object is taken away every N frames (15; 0: never)", "N"},
       {G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &pictures, nullptr, "PICTURE..."},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
   GOptionContext* context = g_option_context_new(nullptr);
@@ -209,7 +233,7 @@ int run(int argc, char** argv) {
         g_free(s);
       g_strfreev(array);
     }
-  } cleanup{{size, instances, scale, kind, out_dir, video, format, name}, pictures};
+  } cleanup{{size, instances, scale, kind, out_dir, video, format, name, sequence}, pictures};
   if (!parsed) {
     const std::string message = error->message;
     g_clear_error(&error);
@@ -260,6 +284,31 @@ int run(int argc, char** argv) {
   s.glare = glare;
   if (video && (packed || camera != 0.0))
     throw Failure("--packed and --camera make scenes, not a clip");
+  SequenceOptions seq;
+  if (sequence) {
+    seq.kind = sequence;
+    if (seq.kind != "conveyor" && seq.kind != "bin")
+      throw Failure("--sequence must be conveyor or bin");
+    if (video || packed || camera != 0.0)
+      throw Failure("--sequence makes its own frames: no --video, --packed or --camera");
+    if (!out_dir)
+      throw Failure("--sequence wants --out DIR");
+    if (!(speed >= 0.0 && speed <= 500.0))
+      throw Failure("--speed must lie between 0 and 500 pixels per frame");
+    if (!(riders >= 0.0 && riders <= 1.0) || !(exposure >= 0.0 && exposure <= 1.0))
+      throw Failure("--riders and --exposure are shares between 0 and 1");
+    if (pick_every < 0)
+      throw Failure("--pick-every must be 0 or more");
+    seq.frames = scenes;
+    seq.speed = speed;
+    seq.riders = riders;
+    seq.exposure = exposure;
+    seq.pick_every = pick_every;
+  }
+  if (fps == 0.0)
+    fps = sequence ? 30.0 : 10.0;
+  if (!(fps > 0.0 && fps <= 1000.0))
+    throw Failure("--fps must lie above 0 and at most 1000");
   const std::string ext = format ? format : "jpg";
   if (ext != "jpg" && ext != "png")
     throw Failure("--format must be jpg or png");
@@ -312,7 +361,11 @@ int run(int argc, char** argv) {
 
   std::vector<Rendered> frames;
   std::vector<std::string> kinds;
-  if (video) {
+  if (sequence) {
+    frames = make_sequence(models, s, seq, rng, margin, extras,
+                           [](int done, int total) { progress("frame", done, total); });
+    kinds.assign(frames.size(), seq.kind);
+  } else if (video) {
     // One long belt moving right: instances keep their pose and move by `speed` per frame.
     const double speed = s.size.width / 40.0;
     const double length = s.size.width + speed * scenes + 2.0 * margin;
@@ -424,6 +477,10 @@ int run(int argc, char** argv) {
   const std::string dataset_name =
       name ? std::string(name) : "synth-seed" + std::to_string(static_cast<long long>(seed));
   json_builder_add_string_value(b, dataset_name.c_str());
+  if (sequence) {
+    json_builder_set_member_name(b, "fps");
+    json_builder_add_double_value(b, fps);
+  }
   json_builder_set_member_name(b, "models");
   json_builder_begin_object(b);
   for (const ModelPicture& sharp : models) {
@@ -485,6 +542,10 @@ int run(int argc, char** argv) {
       add_double(b, "in_frame", t.in_frame);
       add_double(b, "visible", t.visible);
       add_double(b, "covered", t.covered);
+      if (t.track >= 0) {
+        json_builder_set_member_name(b, "track");
+        json_builder_add_int_value(b, t.track);
+      }
       json_builder_end_object(b);
     }
     json_builder_end_array(b);

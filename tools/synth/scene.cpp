@@ -250,6 +250,7 @@ Rendered render(cv::Mat bg, const std::vector<ModelPicture>& models,
     t.scale = p.scale;
     t.tilt = p.tilt;
     t.z = static_cast<int>(i);
+    t.track = p.track;
     const Layer& layer = layers[i];
     if (!layer.mask.empty()) {
       const cv::Mat mine = owner(layer.rect) == static_cast<short>(i);
@@ -302,7 +303,8 @@ Rendered render(cv::Mat bg, const std::vector<ModelPicture>& models,
     const cv::Point2d c((length - 1) / 2.0, (length - 1) / 2.0), d(std::cos(a), std::sin(a));
     cv::line(kernel, c - d * (length / 2.0), c + d * (length / 2.0), cv::Scalar(1.0), 1);
     kernel /= cv::sum(kernel)[0];
-    cv::filter2D(bg, bg, -1, kernel);
+    if (!extras.fixed_blur)
+      cv::filter2D(bg, bg, -1, kernel);
   }
   cv::Mat noise(frame, CV_32FC3);
   cv::randn(noise, 0.0, rng.uniform(1.5, 5.0));

@@ -59,6 +59,7 @@ struct ModelPicture {
 struct Placed {
   int model = 0;
   int level = -1;         ///< Stacking level (--packed: 0 the floor layer, 1 on it); -1: own z.
+  int track = -1;         ///< Identity of the object in a sequence (--sequence); -1: none.
   cv::Matx33d homography; ///< Model pixels -> frame pixels.
   double angle = 0, scale = 1, tilt = 0;
   double brightness = 1.0;
@@ -73,6 +74,7 @@ struct Rendered {
     std::vector<cv::Point2d> points, polygon;
     double angle = 0, scale = 1, tilt = 0, in_frame = 0, visible = 0, covered = 0;
     int z = 0;
+    int track = -1; ///< Placed::track.
   };
   std::vector<Truth> truth;
 };
@@ -96,6 +98,20 @@ struct Extras {
   Random* cover_rng = nullptr;
   int glare = 0;
   Random* glare_rng = nullptr;
+  /// No random motion blur (a sequence blurs along its belt itself); the random draws are the
+  /// same, so the rest of the look does not change.
+  bool fixed_blur = false;
+};
+
+/// What --sequence makes (sequence.cpp).
+struct SequenceOptions {
+  std::string kind = "conveyor"; ///< "conveyor" or "bin".
+  int frames = 150;
+  double speed = 12.0;   ///< Conveyor: pixels per frame.
+  double riders = 0.25;  ///< Conveyor: share of objects with another lying partly on them.
+  double gap = 200.0;    ///< Conveyor: largest extra gap between objects of a lane, pixels.
+  double exposure = 0.5; ///< Conveyor: share of the frame time the shutter is open (blur).
+  int pick_every = 15;   ///< Bin: the top free object is taken away every N frames (0: never).
 };
 
 // models.cpp: model pictures and what the options make of them.
@@ -118,6 +134,11 @@ Rendered render(cv::Mat bg, const std::vector<ModelPicture>& models,
 std::vector<Placed> place(const std::string& kind, const std::vector<ModelPicture>& models,
                           const std::vector<int>& allowed, const Settings& s, Random& rng);
 int margin_for(const std::vector<ModelPicture>& models, const Settings& s);
+
+// sequence.cpp: the frames of one video, each instance with its `track`.
+std::vector<Rendered> make_sequence(const std::vector<ModelPicture>& models, const Settings& s,
+                                    const SequenceOptions& o, Random& rng, int margin,
+                                    const Extras& extras, void (*progress)(int done, int total));
 
 // packed.cpp: rows of identical boxes side by side, in one or two layers.
 std::vector<Placed> place_packed(const std::vector<ModelPicture>& models,

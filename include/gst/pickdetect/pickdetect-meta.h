@@ -72,6 +72,14 @@ typedef struct {
  * @n_world_outline: number of vertices of @world_outline (@n_outline when calibrated, else 0)
  * @world_outline: (array length=n_world_outline): the outline on the plane, in millimetres
  * @height: height of the instance's top face above the plane in millimetres (its model's)
+ * @track_id: with tracking, the identity of the physical object across the frames of the
+ *   stream (unique, never reused, 1 the first); 0 without tracking
+ * @first_seen: running time in nanoseconds of the first frame that detected it
+ * @frames_seen: frames that detected it, this one included
+ * @velocity_x: motion in pixels per second, x
+ * @velocity_y: motion in pixels per second, y
+ * @tracked: %TRUE when not detected in this frame but carried forward from the earlier ones
+ *   (its pose predicted; never pickable)
  *
  * One object instance. Inside a meta every array belongs to the meta. The world fields (on the
  * work plane, in millimetres, lens distortion and the model's height accounted for) come after
@@ -106,6 +114,12 @@ typedef struct {
   guint n_world_outline;
   GstPickDetectPoint* world_outline;
   gdouble height;
+  guint64 track_id;
+  guint64 first_seen;
+  guint frames_seen;
+  gdouble velocity_x;
+  gdouble velocity_y;
+  gboolean tracked;
 } GstPickDetectInstance;
 
 typedef struct _GstPickDetectMeta GstPickDetectMeta;
@@ -115,6 +129,10 @@ typedef struct _GstPickDetectMeta GstPickDetectMeta;
  * @meta: parent #GstMeta
  * @n_instances: number of instances
  * @instances: (array length=n_instances): the instances, in the order the detector gave them
+ *   (with tracking, those carried forward after them)
+ * @has_motion: %TRUE when tracked instances move together (a belt): @motion_x, @motion_y
+ * @motion_x: their common motion in pixels per second, x
+ * @motion_y: their common motion in pixels per second, y
  *
  * Read it with gst_pickdetect_meta_get_n_instances() and gst_pickdetect_meta_get_instance().
  */
@@ -122,6 +140,9 @@ struct _GstPickDetectMeta {
   GstMeta meta;
   guint n_instances;
   GstPickDetectInstance* instances;
+  gboolean has_motion;
+  gdouble motion_x;
+  gdouble motion_y;
 };
 
 #define GST_PICKDETECT_META_API_TYPE (gst_pickdetect_meta_api_get_type())
