@@ -43,16 +43,11 @@
 #include <pickdetect/model.hpp>
 
 #include <gst/video/video.h>
-#include <glib/gstdio.h>
-
-#include <opencv2/core/persistence.hpp>
 
 #include <algorithm>
 #include <exception>
 #include <memory>
-#include <stdexcept>
 #include <string>
-#include <unistd.h>
 #include <utility>
 #include <vector>
 
@@ -215,131 +210,44 @@ static GstPickDetectMethod from_core_method(pickdetect::Method method) {
 /* ------------------------------------------------------------------------------------------- */
 /* Model loading                                                                               */
 
-/// How a failure to read `path` is reported: not found, unreadable, or wrong contents.
-static GstResourceError file_error_code(const std::string& path) {
-  if (!g_file_test(path.c_str(), G_FILE_TEST_EXISTS))
+/// The resource error a failure of the core is reported as: not found, unreadable, or wrong
+/// contents.
+static GstResourceError resource_error_code(pickdetect::ErrorKind kind) {
+  switch (kind) {
+  case pickdetect::ErrorKind::NotFound:
     return GST_RESOURCE_ERROR_NOT_FOUND;
-  if (g_access(path.c_str(), R_OK) != 0 || g_file_test(path.c_str(), G_FILE_TEST_IS_DIR))
+  case pickdetect::ErrorKind::CannotRead:
     return GST_RESOURCE_ERROR_OPEN_READ;
+  case pickdetect::ErrorKind::Invalid:
+    break;
+  }
   return GST_RESOURCE_ERROR_SETTINGS;
 }
 
-/// The entries of the `model` property: split at commas, blanks around each entry trimmed.
-static std::vector<std::string> split_model_list(const std::string& value) {
-  std::vector<std::string> entries;
-  gchar** parts = g_strsplit(value.c_str(), ",", -1);
-  for (gchar** p = parts; *p; ++p)
-    entries.emplace_back(g_strstrip(*p));
-  g_strfreev(parts);
-  return entries;
-}
-
-/// Whether the core reads `path` as a structured file (YAML, JSON or XML) rather than a picture.
-static bool is_structured_file(const std::string& path) {
-  gchar* lower = g_ascii_strdown(path.c_str(), -1);
-  std::string name(lower);
-  g_free(lower);
-  if (g_str_has_suffix(name.c_str(), ".gz"))
-    name.resize(name.size() - 3);
-  for (const char* ext : {".yml", ".yaml", ".json", ".xml"})
-    if (g_str_has_suffix(name.c_str(), ext))
-      return true;
-  return false;
-}
-
-/// Reads a model-set file (a structured file with a `models` list and no `image`) into the
-/// paths of its models, made relative to the set file's folder. Returns false when `path` is
-/// not a model set (it is then a model file or picture, or broken, which load_model reports).
-/// Throws std::runtime_error when it is a model set that is malformed.
-static bool read_model_set(const std::string& path, std::vector<std::string>& models) {
-  if (!is_structured_file(path) || !g_file_test(path.c_str(), G_FILE_TEST_IS_REGULAR))
-    return false;
-  cv::FileStorage store;
-  try {
-    if (!store.open(path, cv::FileStorage::READ))
-      return false;
-  } catch (const cv::Exception&) {
-    return false;
-  }
-  const cv::FileNode root = store.root();
-  if (!root.isMap() || root["models"].empty() || !root["image"].empty())
-    return false;
-  const std::string origin = "model set \"" + path + "\"";
-  const cv::FileNode list = root["models"];
-  if (!list.isSeq() || list.size() == 0)
-    throw std::runtime_error(origin + ": 'models' must be a non-empty list of model files");
-  gchar* dir = g_path_get_dirname(path.c_str());
-  const std::string folder(dir);
-  g_free(dir);
-  for (size_t i = 0; i < list.size(); i++) {
-    const cv::FileNode item = list[static_cast<int>(i)];
-    const std::string entry = item.isString() ? static_cast<std::string>(item) : std::string();
-    if (entry.empty())
-      throw std::runtime_error(origin + ": models[" + std::to_string(i) +
-                               "] must be the path of a model file or picture");
-    if (g_path_is_absolute(entry.c_str())) {
-      models.push_back(entry);
-    } else {
-      gchar* joined = g_build_filename(folder.c_str(), entry.c_str(), nullptr);
-      models.emplace_back(joined);
-      g_free(joined);
-    }
-  }
-  return true;
-}
-
-/// Builds one detector over every model the `model` property names (see its blurb): a
-/// comma-separated list of model files, pictures and model-set files. nullptr and `failure`
-/// filled when any of them cannot be loaded, when two models share a name, or when the list
-/// has an empty entry. Never throws.
+/// Builds one detector over every model the `model` property names (see its blurb and
+/// pickdetect::load_models). nullptr and `failure` filled when any of them cannot be loaded,
+/// when two models share a name, or when the list has an empty entry. Never throws.
 static std::shared_ptr<const pickdetect::Detector> load_detector(const std::string& value,
                                                                  LoadFailure& failure) {
   std::string path = value; // The file being read when something failed.
   std::string reason;
+  pickdetect::ErrorKind kind = pickdetect::ErrorKind::Invalid;
   try {
-    std::vector<pickdetect::Model> models;
-    std::vector<std::string> sources; // The file each model came from.
-    for (const std::string& entry : split_model_list(value)) {
-      if (entry.empty()) {
-        failure.code = GST_RESOURCE_ERROR_SETTINGS;
-        failure.message = "Could not load the models \"" + value +
-                          "\": the comma-separated list has an empty entry";
-        return nullptr;
-      }
-      path = entry;
-      std::vector<std::string> listed;
-      if (!read_model_set(entry, listed))
-        listed.push_back(entry);
-      for (const std::string& file : listed) {
-        path = file;
-        std::vector<std::string> nested;
-        if (file != entry && read_model_set(file, nested))
-          throw std::runtime_error("model set \"" + entry + "\" lists another model set, \"" +
-                                   file + "\"; list that set's models instead");
-        models.push_back(pickdetect::load_model(file));
-        sources.push_back(file);
-      }
+    return std::make_shared<const pickdetect::Detector>(pickdetect::load_models(value));
+  } catch (const pickdetect::Error& e) {
+    failure.code = resource_error_code(e.kind());
+    if (e.path().empty()) { // The list as a whole.
+      failure.message = "Could not load the models \"" + value + "\": " + e.what();
+      return nullptr;
     }
-    // Instances are told apart by their model's name only; the same model twice would also
-    // make every one of its features ambiguous, so that none would match.
-    for (size_t i = 0; i < models.size(); i++) {
-      for (size_t j = 0; j < i; j++) {
-        if (models[i].name == models[j].name) {
-          failure.code = GST_RESOURCE_ERROR_SETTINGS;
-          failure.message = "Could not load the models \"" + value + "\": two models are named \"" +
-                            models[i].name + "\" (" + sources[j] + " and " + sources[i] +
-                            "); give each model a distinct name (the `name` key of a model file)";
-          return nullptr;
-        }
-      }
-    }
-    return std::make_shared<const pickdetect::Detector>(std::move(models));
+    path = e.path();
+    reason = e.what();
+    kind = e.kind();
   } catch (const std::exception& e) {
     reason = e.what();
-  } catch (...) {
-    reason = "unknown error";
+    kind = pickdetect::file_error_kind(path);
   }
-  failure.code = file_error_code(path);
+  failure.code = resource_error_code(kind);
   if (reason.find(path) != std::string::npos)
     failure.message = "Could not load the model: " + reason;
   else
@@ -550,7 +458,8 @@ static bool load_calibration_file(GstPickDetect* self) {
     } catch (const std::exception& e) {
       const std::string message = std::string("Could not load the calibration: ") + e.what();
       GST_ERROR_OBJECT(self, "%s", message.c_str());
-      post_resource_message(self, GST_MESSAGE_ERROR, file_error_code(path), message,
+      post_resource_message(self, GST_MESSAGE_ERROR,
+                            resource_error_code(pickdetect::file_error_kind(path)), message,
                             "calibration=" + path);
       return false;
     }

@@ -52,4 +52,16 @@ void save_model(const Model& model, const std::string& path, bool cache_features
 /// Computes the model's SIFT and ORB features from its picture and mask (used by the loaders).
 void compute_model_features(Model& model);
 
+/// Whether load_model reads `path` as a model file (YAML, JSON or XML by its extension, also
+/// gzipped) rather than as a picture.
+bool is_model_file(const std::string& path);
+
+/// Loads every model a model list names: model files, pictures and model-set files (a model
+/// file with a `models` list of model files or pictures and no `image`; relative entries are
+/// relative to the set's folder), separated by commas, blanks around each entry ignored. Throws
+/// Error when any cannot be loaded (its path() the file being read and its kind() why), when an
+/// entry is empty, when a set lists another set, or when two models share a name (path() empty
+/// for the list as a whole).
+std::vector<Model> load_models(const std::string& list);
+
 } // namespace pickdetect

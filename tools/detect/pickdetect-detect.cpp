@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cstdio>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
@@ -74,7 +75,9 @@ int main(int argc, char** argv) {
   gboolean no_scale = FALSE, no_refine = FALSE, json = FALSE, exact = FALSE;
   const GOptionEntry entries[] = {
       {"model", 'm', 0, G_OPTION_ARG_FILENAME_ARRAY, &models,
-       "Model file (.yml) or model picture; repeat for several models", "FILE"},
+       "Model file (.yml), model picture or model-set file, or several separated by commas (as "
+       "the element's model property); repeat for more models",
+       "FILE"},
       {"method", 0, 0, G_OPTION_ARG_STRING, &method,
        "voting (default), ransac-clustered or ransac-all", "NAME"},
       {"features", 0, 0, G_OPTION_ARG_STRING, &features,
@@ -145,8 +148,10 @@ int main(int argc, char** argv) {
     s.search = exact ? pickdetect::Search::BruteForce : pickdetect::Search::KdTree;
 
     std::vector<pickdetect::Model> loaded;
-    for (gchar** m = models; *m; ++m)
-      loaded.push_back(pickdetect::load_model(*m));
+    for (gchar** m = models; *m; ++m) {
+      std::vector<pickdetect::Model> listed = pickdetect::load_models(*m);
+      std::move(listed.begin(), listed.end(), std::back_inserter(loaded));
+    }
     if (save)
       pickdetect::save_model(loaded.front(), save, true);
     const pickdetect::Detector detector(std::move(loaded));
