@@ -370,4 +370,9 @@ GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameF
   return GST_FLOW_OK;
 }
 
+void post_frame_message(GstElement* element, GstStructure* structure) {
+  if (structure)
+    gst_element_post_message(element, gst_message_new_element(GST_OBJECT(element), structure));
+}
+
 } // namespace gstpickdetect

@@ -34,7 +34,7 @@
 #include "gstpickdetect.h"
 
 #include "frame.hpp"
-#include "ordered-workers.hpp"
+#include "frame-threads.hpp"
 
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <pickdetect/calibration.hpp>
@@ -128,10 +128,9 @@ struct GstPickDetectPrivate {
   int active_threads = 1;        ///< Frame threads since start (`threads` resolved).
   std::string calibration_path;  ///< The `calibration` property (loaded at start).
   // ---- streaming thread (and state changes while it is stopped) only ----
-  std::shared_ptr<const gstpickdetect::FrameFormat> format; ///< From the caps, for new frames.
-  std::unique_ptr<gstpickdetect::OrderedWorkers> workers;   ///< With more than one frame thread.
-  GstFlowReturn drain_ret = GST_FLOW_OK; ///< A failed push while draining, told at the next frame.
-  bool size_error_posted = false;        ///< Caps of the wrong size for the calibration, told once.
+  std::shared_ptr<const gstpickdetect::FrameFormat> format;   ///< From the caps, for new frames.
+  std::unique_ptr<gstpickdetect::FrameThreads> frame_threads; ///< With more than one thread.
+  bool size_error_posted = false; ///< Caps of the wrong size for the calibration, told once.
 };
 
 struct _GstPickDetect {
@@ -545,8 +544,7 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
     threads = static_cast<int>(g_get_num_processors());
   threads = std::max(threads, 1);
   if (threads > 1)
-    priv->workers = std::make_unique<gstpickdetect::OrderedWorkers>(threads);
-  priv->drain_ret = GST_FLOW_OK;
+    priv->frame_threads = std::make_unique<gstpickdetect::FrameThreads>(trans, threads);
   priv->size_error_posted = false;
   GST_OBJECT_LOCK(self);
   priv->active_threads = threads;
@@ -557,7 +555,7 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
 
 static gboolean gst_pick_detect_stop(GstBaseTransform* trans) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  self->priv->workers.reset(); // Drops the frames in the works, joins the frame threads.
+  self->priv->frame_threads.reset(); // Drops the frames in the works, joins the threads.
   std::shared_ptr<const pickdetect::Detector> old;
   GST_OBJECT_LOCK(self);
   self->priv->started = false;
@@ -611,15 +609,7 @@ static gboolean gst_pick_detect_set_info(GstVideoFilter* filter, GstCaps* incaps
 /* ------------------------------------------------------------------------------------------- */
 /* Per frame                                                                                   */
 
-/// What a frame is processed with, taken as a whole under the lock: the same settings, models
-/// and format from its detection to its metas, whatever is set meanwhile.
-struct FrameInputs {
-  std::shared_ptr<const pickdetect::Detector> detector;
-  std::shared_ptr<const gstpickdetect::FrameFormat> format;
-  gstpickdetect::FrameConfig config;
-};
-
-static bool take_frame_inputs(GstPickDetect* self, FrameInputs& in) {
+static bool take_frame_inputs(GstPickDetect* self, gstpickdetect::FrameInputs& in) {
   GST_OBJECT_LOCK(self);
   in.detector = self->priv->detector;
   in.config = self->priv->config;
@@ -636,153 +626,38 @@ static bool take_frame_inputs(GstPickDetect* self, FrameInputs& in) {
   return true;
 }
 
-static void post_frame_message(GstPickDetect* self, GstStructure* structure) {
-  if (structure)
-    gst_element_post_message(GST_ELEMENT(self),
-                             gst_message_new_element(GST_OBJECT(self), structure));
-}
-
 /// One frame: everything at once, on the streaming thread (`threads` = 1).
 static GstFlowReturn gst_pick_detect_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  FrameInputs in;
+  gstpickdetect::FrameInputs in;
   if (!take_frame_inputs(self, in))
     return GST_FLOW_ERROR;
   GstStructure* message = nullptr;
   const GstFlowReturn ret = gstpickdetect::process_frame(
       GST_ELEMENT(self), buffer, *in.format, in.config, *in.detector, trans->segment, &message);
-  post_frame_message(self, message);
+  gstpickdetect::post_frame_message(GST_ELEMENT(self), message);
   return ret;
 }
 
-namespace {
-
-/// One frame on a frame thread (`threads` > 1). Owns its buffer until it is handed downstream.
-class FrameJob final : public gstpickdetect::OrderedWorkers::Job {
-public:
-  FrameJob(GstPickDetect* self, GstBuffer* buffer, FrameInputs inputs, const GstSegment& segment)
-      : self_(self), buffer_(buffer), in_(std::move(inputs)), segment_(segment) {}
-  ~FrameJob() override {
-    if (message_)
-      gst_structure_free(message_);
-    if (buffer_)
-      gst_buffer_unref(buffer_);
-  }
-  FrameJob(const FrameJob&) = delete;
-  FrameJob& operator=(const FrameJob&) = delete;
-
-  void run() override {
-    ret_ = gstpickdetect::process_frame(GST_ELEMENT(self_), buffer_, *in_.format, in_.config,
-                                        *in_.detector, segment_, &message_);
-  }
-
-  /// Posts the frame's message and hands over the buffer (null when the frame failed).
-  GstBuffer* finish(GstFlowReturn& ret) {
-    post_frame_message(self_, message_);
-    message_ = nullptr;
-    ret = ret_;
-    GstBuffer* out = ret_ == GST_FLOW_OK ? buffer_ : nullptr;
-    if (out)
-      buffer_ = nullptr;
-    return out;
-  }
-
-private:
-  GstPickDetect* self_; ///< Not owned: the element outlives its workers.
-  GstBuffer* buffer_;
-  FrameInputs in_;
-  GstSegment segment_;
-  GstStructure* message_ = nullptr;
-  GstFlowReturn ret_ = GST_FLOW_OK;
-};
-
-} // namespace
-
-/// Pushes every frame still in the works downstream, in order: before a serialized event, so
-/// that events and frames keep their order, and at EOS. Streaming thread.
-static GstFlowReturn drain_frames(GstPickDetect* self) {
-  GstPickDetectPrivate* priv = self->priv;
-  GstFlowReturn result = GST_FLOW_OK;
-  if (!priv->workers)
-    return result;
-  while (std::unique_ptr<gstpickdetect::OrderedWorkers::Job> job =
-             priv->workers->take_oldest(true)) {
-    GstFlowReturn ret = GST_FLOW_OK;
-    GstBuffer* out = static_cast<FrameJob*>(job.get())->finish(ret);
-    if (out && result == GST_FLOW_OK)
-      ret = gst_pad_push(GST_BASE_TRANSFORM_SRC_PAD(self), out);
-    else if (out)
-      gst_buffer_unref(out);
-    if (result == GST_FLOW_OK)
-      result = ret;
-  }
-  return result;
-}
-
-/// Drops every frame in the works (flush, stop): those not started are not detected.
-static void discard_frames(GstPickDetect* self) {
-  if (self->priv->workers)
-    self->priv->workers->cancel_all();
-}
-
-/// With `threads` > 1: each input frame goes to a frame thread, and the oldest frame comes out
-/// once done; the streaming thread waits only while every thread is busy. With 1, the base
-/// class's one-frame-at-a-time path (transform_ip).
+/// With `threads` > 1 the frame threads (frame-threads.cpp); with 1, the base class's
+/// one-frame-at-a-time path (transform_ip).
 static GstFlowReturn gst_pick_detect_generate_output(GstBaseTransform* trans, GstBuffer** outbuf) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  GstPickDetectPrivate* priv = self->priv;
   *outbuf = nullptr;
-  if (!priv->workers)
+  if (!self->priv->frame_threads)
     return GST_BASE_TRANSFORM_CLASS(parent_class)->generate_output(trans, outbuf);
-
-  if (priv->drain_ret != GST_FLOW_OK) { // A push while draining failed: say so now.
-    const GstFlowReturn ret = priv->drain_ret;
-    priv->drain_ret = GST_FLOW_OK;
-    gst_buffer_replace(&trans->queued_buf, nullptr);
-    return ret;
-  }
-
-  if (GstBuffer* inbuf = trans->queued_buf) {
-    trans->queued_buf = nullptr;
-    FrameInputs in;
-    if (!take_frame_inputs(self, in)) {
-      gst_buffer_unref(inbuf);
-      return GST_FLOW_ERROR;
-    }
-    GstBuffer* buffer = nullptr; // The input made writable (copied only when shared).
-    const GstFlowReturn ret =
-        GST_BASE_TRANSFORM_CLASS(parent_class)->prepare_output_buffer(trans, inbuf, &buffer);
-    if (buffer != inbuf)
-      gst_buffer_unref(inbuf);
-    if (ret != GST_FLOW_OK || !buffer)
-      return ret != GST_FLOW_OK ? ret : GST_FLOW_ERROR;
-    priv->workers->submit(std::make_unique<FrameJob>(self, buffer, std::move(in), trans->segment));
-  }
-
-  const bool busy = priv->workers->pending() >= static_cast<size_t>(priv->workers->threads());
-  std::unique_ptr<gstpickdetect::OrderedWorkers::Job> job = priv->workers->take_oldest(busy);
-  if (!job)
-    return GST_FLOW_OK; // Nothing finished yet: the next input first.
-  GstFlowReturn ret = GST_FLOW_OK;
-  *outbuf = static_cast<FrameJob*>(job.get())->finish(ret);
-  return ret;
+  return self->priv->frame_threads->generate_output(
+      GST_BASE_TRANSFORM_CLASS(parent_class),
+      [self](gstpickdetect::FrameInputs& in) { return take_frame_inputs(self, in); }, outbuf);
 }
 
 static gboolean gst_pick_detect_sink_event(GstBaseTransform* trans, GstEvent* event) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  switch (GST_EVENT_TYPE(event)) {
-  case GST_EVENT_FLUSH_STOP:
-    discard_frames(self);
-    self->priv->drain_ret = GST_FLOW_OK;
-    break;
-  default:
-    if (GST_EVENT_IS_SERIALIZED(event)) {
-      const GstFlowReturn ret = drain_frames(self);
-      if (ret != GST_FLOW_OK && self->priv->drain_ret == GST_FLOW_OK)
-        self->priv->drain_ret = ret;
-    }
-    break;
-  }
+  gstpickdetect::FrameThreads* frame_threads = self->priv->frame_threads.get();
+  if (frame_threads && GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP)
+    frame_threads->flush();
+  else if (frame_threads && GST_EVENT_IS_SERIALIZED(event))
+    frame_threads->drain();
   return GST_BASE_TRANSFORM_CLASS(parent_class)->sink_event(trans, event);
 }
 
@@ -797,20 +672,8 @@ static gboolean gst_pick_detect_query(GstBaseTransform* trans, GstPadDirection d
   GST_OBJECT_LOCK(self);
   const int threads = self->priv->active_threads;
   GST_OBJECT_UNLOCK(self);
-  const GstVideoInfo* info = &GST_VIDEO_FILTER(self)->in_info;
-  if (threads <= 1 || GST_VIDEO_INFO_FPS_N(info) <= 0)
-    return TRUE;
-  const GstClockTime frame =
-      gst_util_uint64_scale_int(GST_SECOND, GST_VIDEO_INFO_FPS_D(info), GST_VIDEO_INFO_FPS_N(info));
-  const GstClockTime added = frame * static_cast<GstClockTime>(threads - 1);
-  gboolean live = FALSE;
-  GstClockTime min = 0, max = GST_CLOCK_TIME_NONE;
-  gst_query_parse_latency(query, &live, &min, &max);
-  if (GST_CLOCK_TIME_IS_VALID(max))
-    max += added;
-  gst_query_set_latency(query, live, min + added, max);
-  GST_DEBUG_OBJECT(self, "%d frame threads: latency + %" GST_TIME_FORMAT, threads,
-                   GST_TIME_ARGS(added));
+  gstpickdetect::add_frame_thread_latency(GST_OBJECT(self), query, threads,
+                                          GST_VIDEO_FILTER(self)->in_info);
   return TRUE;
 }
 
