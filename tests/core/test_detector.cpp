@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // The detector on scenes built from OpenCV's box.png at known poses.
-#include "../common/box.hpp"
-#include "../common/scene.hpp"
+#include "../support/box.hpp"
+#include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
 

@@ -3,7 +3,7 @@
 #include "../../src/look_alikes.hpp"
 #include "../../src/point_grid.hpp"
 #include "../../src/polygon.hpp"
-#include "../common/scene.hpp"
+#include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
 

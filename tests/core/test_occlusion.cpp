@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Which one to pick: stacks in both orders, three levels, touching neighbours, the frame edge.
-#include "../common/box.hpp"
-#include "../common/scene.hpp"
+#include "../support/box.hpp"
+#include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
 

@@ -2,8 +2,8 @@
 // Packed rows and tilted faces: one visible surface is one object, and a face seen far off its
 // normal is placed by all of its evidence.
 #include "../../src/scene_explanation.hpp"
-#include "../common/box.hpp"
-#include "../common/scene.hpp"
+#include "../support/box.hpp"
+#include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
 

@@ -3,6 +3,8 @@
 //
 //   pickdetect-detect --model box.png box_in_scene.png
 //   pickdetect-detect --model cookies.yml --method ransac-clustered --annotate out.png scene.jpg
+#include "common/options.hpp"
+
 #include <pickdetect/pickdetect.hpp>
 
 #include <glib.h>
@@ -108,14 +110,11 @@ int main(int argc, char** argv) {
        "Write the (first) model as a model file with its features cached", "FILE"},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
 
-  std::unique_ptr<GOptionContext, decltype(&g_option_context_free)> ctx(
-      g_option_context_new("PICTURE... - find every instance of a model in pictures"),
-      g_option_context_free);
-  g_option_context_add_main_entries(ctx.get(), entries, nullptr);
-  GError* err = nullptr;
-  if (!g_option_context_parse(ctx.get(), &argc, &argv, &err)) {
-    std::fprintf(stderr, "pickdetect-detect: %s\n", err->message);
-    g_error_free(err);
+  pickdetect::tools::OptionHelp help;
+  help.parameter = "PICTURE... - find every instance of a model in pictures";
+  std::string bad_options;
+  if (!pickdetect::tools::parse_options(argc, argv, entries, help, bad_options)) {
+    std::fprintf(stderr, "pickdetect-detect: %s\n", bad_options.c_str());
     return 2;
   }
   auto cleanup = [&] {

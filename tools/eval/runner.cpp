@@ -1,6 +1,11 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #include "runner.hpp"
 
+#include "common/video-buffer.hpp"
+
+#include <pickdetect/error.hpp>
+#include <pickdetect/model.hpp>
+
 #include <gst/app/gstappsink.h>
 #include <gst/app/gstappsrc.h>
 #include <gst/gst.h>
@@ -8,7 +13,6 @@
 #ifdef HAVE_PICKDETECT_META
 #include <gst/pickdetect/pickdetect-meta.h>
 #endif
-#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -149,23 +153,17 @@ std::string write_model_file(const Dataset& dataset, const ModelInfo& model,
   gchar* file = g_build_filename(folder.c_str(), (model.name + ".yml").c_str(), nullptr);
   const std::string path(file);
   g_free(file);
-  // The model file format of the core's load_model (written as its save_model does).
+  pickdetect::Model written;
+  written.name = model.name;
+  written.image_path = image;
+  for (const Point& p : model.principal_points)
+    written.principal_points.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+  for (const Point& p : model.polygon)
+    written.outline.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
   try {
-    cv::FileStorage store(path, cv::FileStorage::WRITE);
-    if (!store.isOpened())
-      throw RunError("model file '" + path + "' cannot be written");
-    store << "name" << model.name;
-    store << "image" << image;
-    auto points = [&store](const char* key, const std::vector<Point>& pts) {
-      store << key << "[";
-      for (const Point& p : pts)
-        store << "[:" << p.x << p.y << "]";
-      store << "]";
-    };
-    points("principal_points", model.principal_points);
-    points("outline", model.polygon);
-  } catch (const cv::Exception& e) {
-    throw RunError("model file '" + path + "' cannot be written: " + e.err);
+    pickdetect::save_model(written, path, false);
+  } catch (const pickdetect::Error& e) {
+    throw RunError(e.what());
   }
   return path;
 }
@@ -278,6 +276,7 @@ void ElementRunner::check_bus(const std::string& context) {
 
 FrameResult ElementRunner::process(const Frame& frame) {
   const char* format = frame.bgr ? "BGR" : "GRAY8";
+  const cv::Size size(frame.width, frame.height);
   if (!impl_->caps || [&] {
         const GstStructure* s = gst_caps_get_structure(impl_->caps, 0);
         int w = 0, h = 0;
@@ -288,22 +287,11 @@ FrameResult ElementRunner::process(const Frame& frame) {
       }()) {
     if (impl_->caps)
       gst_caps_unref(impl_->caps);
-    impl_->caps = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, format, "width",
-                                      G_TYPE_INT, frame.width, "height", G_TYPE_INT, frame.height,
-                                      "framerate", GST_TYPE_FRACTION, 0, 1, nullptr);
+    impl_->caps = gst_caps_from_string(pickdetect::tools::caps_string(format, size, 0).c_str());
   }
-  // GStreamer's default row stride is rounded up to 4 bytes.
-  GstVideoInfo info;
-  gst_video_info_from_caps(&info, impl_->caps);
-  const size_t row = frame.pixels.size() / static_cast<size_t>(frame.height);
-  const size_t stride = static_cast<size_t>(GST_VIDEO_INFO_PLANE_STRIDE(&info, 0));
-  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
-  GstMapInfo map;
-  gst_buffer_map(buffer, &map, GST_MAP_WRITE);
-  for (int y = 0; y < frame.height; ++y)
-    std::memcpy(map.data + stride * static_cast<size_t>(y),
-                frame.pixels.data() + row * static_cast<size_t>(y), row);
-  gst_buffer_unmap(buffer, &map);
+  const cv::Mat picture(size, frame.bgr ? CV_8UC3 : CV_8UC1,
+                        const_cast<unsigned char*>(frame.pixels.data()));
+  GstBuffer* buffer = pickdetect::tools::video_buffer(picture, format);
   GST_BUFFER_PTS(buffer) = impl_->frames * GST_SECOND;
   GST_BUFFER_DURATION(buffer) = GST_SECOND;
   ++impl_->frames;
