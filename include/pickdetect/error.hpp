@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #pragma once
 
+#include <pickdetect/export.hpp>
+
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -18,7 +20,7 @@ enum class ErrorKind {
 /// Every refusal of the core (bad model file, textureless picture, bad frame) is an Error whose
 /// message names what was wrong and, where there is one, the file. Errors about a file carry
 /// its path and the kind of failure (file_error_kind of that path).
-class Error : public std::runtime_error {
+class PICKDETECT_API Error : public std::runtime_error {
 public:
   explicit Error(const std::string& what, ErrorKind kind = ErrorKind::Invalid,
                  std::string path = {})
@@ -35,6 +37,6 @@ private:
 
 /// Why reading `path` failed: NotFound when it does not exist, CannotRead when it cannot be
 /// opened for reading (or is a directory), else Invalid (its contents were wrong).
-ErrorKind file_error_kind(const std::string& path);
+PICKDETECT_API ErrorKind file_error_kind(const std::string& path);
 
 } // namespace pickdetect

@@ -4,6 +4,7 @@
 #include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
+#include <pickdetect/pose.hpp>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>

@@ -5,7 +5,13 @@
 #include "../../src/polygon.hpp"
 #include "common/scene.hpp"
 
+#include <pickdetect/matching.hpp>
+#include <pickdetect/meanshift.hpp>
+#include <pickdetect/occlusion.hpp>
 #include <pickdetect/pickdetect.hpp>
+#include <pickdetect/pose.hpp>
+#include <pickdetect/ransac.hpp>
+#include <pickdetect/voting.hpp>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
