@@ -236,3 +236,11 @@ TEST(Occlusion, AFrameThatIsNotGreyIsRefusedByName) {
   const cv::Mat small(300, 400, CV_8UC1, cv::Scalar(90));
   EXPECT_THROW(assess_occlusion(found, box_detector().models(), {800, 600}, small), Error);
 }
+
+TEST(Occlusion, OverlapAreaOfCrossingAndTouchingOutlines) {
+  const std::vector<cv::Point2f> a = {{0, 0}, {100, 0}, {100, 100}, {0, 100}};
+  const std::vector<cv::Point2f> b = {{50, 50}, {150, 50}, {150, 150}, {50, 150}};
+  const std::vector<cv::Point2f> touching = {{100, 0}, {200, 0}, {200, 100}, {100, 100}};
+  EXPECT_NEAR(overlap_area(a, b), 2500.0, 1e-3);
+  EXPECT_NEAR(overlap_area(a, touching), 0.0, 1e-3);
+}
