@@ -4,6 +4,8 @@
 // frame must come out with its meta.
 #include "fuzz_common.hpp"
 
+#include "common/video-buffer.hpp"
+
 #include <gst/check/gstharness.h>
 #include <gst/gst.h>
 #include <gst/pickdetect/pickdetect-meta.h>
@@ -60,33 +62,27 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   GstVideoInfo info;
   if (!gst_video_info_set_format(&info, gst_video_format_from_string(format), width, height))
     __builtin_trap();
+  GstVideoAlignment align;
+  gst_video_alignment_reset(&align);
   if (pad) {
-    GstVideoAlignment align;
-    gst_video_alignment_reset(&align);
     align.padding_top = in.range(0, 4);
     align.padding_left = 2 * in.range(0, 4);
     align.padding_right = in.range(0, 9);
     align.padding_bottom = in.range(0, 4);
-    if (!gst_video_info_align(&info, &align))
-      __builtin_trap();
   }
-  const std::string caps = "video/x-raw,format=" + std::string(format) +
-                           ",width=" + std::to_string(width) + ",height=" + std::to_string(height) +
-                           ",framerate=30/1";
-  gst_harness_set_src_caps_str(h, caps.c_str());
+  gst_harness_set_src_caps_str(
+      h, pickdetect::tools::caps_string(format, cv::Size(width, height)).c_str());
   g_object_set(harness().pickdetect, "max-instances", in.range(0, 3), "allow-scale", in.byte() & 1,
                nullptr);
 
-  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
+  GstBuffer* buffer = pickdetect::tools::allocate_video_buffer(info, pad ? &align : nullptr);
+  if (!buffer)
+    __builtin_trap();
   GstMapInfo map;
   gst_buffer_map(buffer, &map, GST_MAP_WRITE);
   cv::Mat bytes(1, static_cast<int>(map.size), CV_8UC1, map.data);
   fuzz::fill(bytes, in);
   gst_buffer_unmap(buffer, &map);
-  if (pad)
-    gst_buffer_add_video_meta_full(buffer, GST_VIDEO_FRAME_FLAG_NONE, GST_VIDEO_INFO_FORMAT(&info),
-                                   width, height, GST_VIDEO_INFO_N_PLANES(&info), info.offset,
-                                   info.stride);
   GstBuffer* out = gst_harness_push_and_pull(h, buffer);
   if (!out || !gst_buffer_get_pickdetect_meta(out))
     __builtin_trap();

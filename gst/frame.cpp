@@ -480,4 +480,9 @@ GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameF
   return attach_frame(element, buffer, format, config, detector, segment, found, message, tracking);
 }
 
+void post_frame_message(GstElement* element, GstStructure* structure) {
+  if (structure)
+    gst_element_post_message(element, gst_message_new_element(GST_OBJECT(element), structure));
+}
+
 } // namespace gstpickdetect

@@ -84,6 +84,18 @@ private:
   Overlay overlay_;
 };
 
+/// What a frame is processed with, taken as a whole under the element's lock: the same
+/// settings, models and format from its detection to its metas, whatever is set meanwhile.
+struct FrameInputs {
+  std::shared_ptr<const pickdetect::Detector> detector;
+  std::shared_ptr<const FrameFormat> format;
+  FrameConfig config;
+};
+
+/// Posts the "pickdetect" element message of a frame on `element` (nothing when null); takes
+/// `structure`.
+void post_frame_message(GstElement* element, GstStructure* structure);
+
 /// Detects on `buffer` (writable, of `format`), draws when `config.draw`, and attaches the
 /// metas (see the element's documentation). When `config.post_messages`, `*message` receives the
 /// "pickdetect" element message's structure (the caller posts it), timestamps taken from

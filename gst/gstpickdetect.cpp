@@ -34,7 +34,7 @@
 #include "gstpickdetect.h"
 
 #include "frame.hpp"
-#include "ordered-workers.hpp"
+#include "frame-threads.hpp"
 
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <pickdetect/calibration.hpp>
@@ -44,9 +44,6 @@
 #include <pickdetect/tracker.hpp>
 
 #include <gst/video/video.h>
-#include <glib/gstdio.h>
-
-#include <opencv2/core/persistence.hpp>
 
 #include <algorithm>
 #include <exception>
@@ -54,7 +51,6 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <unistd.h>
 #include <utility>
 #include <vector>
 
@@ -143,10 +139,9 @@ struct GstPickDetectPrivate {
   std::string calibration_path;  ///< The `calibration` property (loaded at start).
   std::string count_line;        ///< The `count-line` property as set.
   // ---- streaming thread (and state changes while it is stopped) only ----
-  std::shared_ptr<const gstpickdetect::FrameFormat> format; ///< From the caps, for new frames.
-  std::unique_ptr<gstpickdetect::OrderedWorkers> workers;   ///< With more than one frame thread.
-  GstFlowReturn drain_ret = GST_FLOW_OK; ///< A failed push while draining, told at the next frame.
-  bool size_error_posted = false;        ///< Caps of the wrong size for the calibration, told once.
+  std::shared_ptr<const gstpickdetect::FrameFormat> format;   ///< From the caps, for new frames.
+  std::unique_ptr<gstpickdetect::FrameThreads> frame_threads; ///< With more than one thread.
+  bool size_error_posted = false; ///< Caps of the wrong size for the calibration, told once.
   // Tracking (docs/tracking.md): the tracker lives from the first tracked frame on and keeps
   // counting its ids across resets and restarts, so that no id is ever given twice.
   pickdetect::Tracker tracker;
@@ -233,131 +228,44 @@ static GstPickDetectMethod from_core_method(pickdetect::Method method) {
 /* ------------------------------------------------------------------------------------------- */
 /* Model loading                                                                               */
 
-/// How a failure to read `path` is reported: not found, unreadable, or wrong contents.
-static GstResourceError file_error_code(const std::string& path) {
-  if (!g_file_test(path.c_str(), G_FILE_TEST_EXISTS))
+/// The resource error a failure of the core is reported as: not found, unreadable, or wrong
+/// contents.
+static GstResourceError resource_error_code(pickdetect::ErrorKind kind) {
+  switch (kind) {
+  case pickdetect::ErrorKind::NotFound:
     return GST_RESOURCE_ERROR_NOT_FOUND;
-  if (g_access(path.c_str(), R_OK) != 0 || g_file_test(path.c_str(), G_FILE_TEST_IS_DIR))
+  case pickdetect::ErrorKind::CannotRead:
     return GST_RESOURCE_ERROR_OPEN_READ;
+  case pickdetect::ErrorKind::Invalid:
+    break;
+  }
   return GST_RESOURCE_ERROR_SETTINGS;
 }
 
-/// The entries of the `model` property: split at commas, blanks around each entry trimmed.
-static std::vector<std::string> split_model_list(const std::string& value) {
-  std::vector<std::string> entries;
-  gchar** parts = g_strsplit(value.c_str(), ",", -1);
-  for (gchar** p = parts; *p; ++p)
-    entries.emplace_back(g_strstrip(*p));
-  g_strfreev(parts);
-  return entries;
-}
-
-/// Whether the core reads `path` as a structured file (YAML, JSON or XML) rather than a picture.
-static bool is_structured_file(const std::string& path) {
-  gchar* lower = g_ascii_strdown(path.c_str(), -1);
-  std::string name(lower);
-  g_free(lower);
-  if (g_str_has_suffix(name.c_str(), ".gz"))
-    name.resize(name.size() - 3);
-  for (const char* ext : {".yml", ".yaml", ".json", ".xml"})
-    if (g_str_has_suffix(name.c_str(), ext))
-      return true;
-  return false;
-}
-
-/// Reads a model-set file (a structured file with a `models` list and no `image`) into the
-/// paths of its models, made relative to the set file's folder. Returns false when `path` is
-/// not a model set (it is then a model file or picture, or broken, which load_model reports).
-/// Throws std::runtime_error when it is a model set that is malformed.
-static bool read_model_set(const std::string& path, std::vector<std::string>& models) {
-  if (!is_structured_file(path) || !g_file_test(path.c_str(), G_FILE_TEST_IS_REGULAR))
-    return false;
-  cv::FileStorage store;
-  try {
-    if (!store.open(path, cv::FileStorage::READ))
-      return false;
-  } catch (const cv::Exception&) {
-    return false;
-  }
-  const cv::FileNode root = store.root();
-  if (!root.isMap() || root["models"].empty() || !root["image"].empty())
-    return false;
-  const std::string origin = "model set \"" + path + "\"";
-  const cv::FileNode list = root["models"];
-  if (!list.isSeq() || list.size() == 0)
-    throw std::runtime_error(origin + ": 'models' must be a non-empty list of model files");
-  gchar* dir = g_path_get_dirname(path.c_str());
-  const std::string folder(dir);
-  g_free(dir);
-  for (size_t i = 0; i < list.size(); i++) {
-    const cv::FileNode item = list[static_cast<int>(i)];
-    const std::string entry = item.isString() ? static_cast<std::string>(item) : std::string();
-    if (entry.empty())
-      throw std::runtime_error(origin + ": models[" + std::to_string(i) +
-                               "] must be the path of a model file or picture");
-    if (g_path_is_absolute(entry.c_str())) {
-      models.push_back(entry);
-    } else {
-      gchar* joined = g_build_filename(folder.c_str(), entry.c_str(), nullptr);
-      models.emplace_back(joined);
-      g_free(joined);
-    }
-  }
-  return true;
-}
-
-/// Builds one detector over every model the `model` property names (see its blurb): a
-/// comma-separated list of model files, pictures and model-set files. nullptr and `failure`
-/// filled when any of them cannot be loaded, when two models share a name, or when the list
-/// has an empty entry. Never throws.
+/// Builds one detector over every model the `model` property names (see its blurb and
+/// pickdetect::load_models). nullptr and `failure` filled when any of them cannot be loaded,
+/// when two models share a name, or when the list has an empty entry. Never throws.
 static std::shared_ptr<const pickdetect::Detector> load_detector(const std::string& value,
                                                                  LoadFailure& failure) {
   std::string path = value; // The file being read when something failed.
   std::string reason;
+  pickdetect::ErrorKind kind = pickdetect::ErrorKind::Invalid;
   try {
-    std::vector<pickdetect::Model> models;
-    std::vector<std::string> sources; // The file each model came from.
-    for (const std::string& entry : split_model_list(value)) {
-      if (entry.empty()) {
-        failure.code = GST_RESOURCE_ERROR_SETTINGS;
-        failure.message = "Could not load the models \"" + value +
-                          "\": the comma-separated list has an empty entry";
-        return nullptr;
-      }
-      path = entry;
-      std::vector<std::string> listed;
-      if (!read_model_set(entry, listed))
-        listed.push_back(entry);
-      for (const std::string& file : listed) {
-        path = file;
-        std::vector<std::string> nested;
-        if (file != entry && read_model_set(file, nested))
-          throw std::runtime_error("model set \"" + entry + "\" lists another model set, \"" +
-                                   file + "\"; list that set's models instead");
-        models.push_back(pickdetect::load_model(file));
-        sources.push_back(file);
-      }
+    return std::make_shared<const pickdetect::Detector>(pickdetect::load_models(value));
+  } catch (const pickdetect::Error& e) {
+    failure.code = resource_error_code(e.kind());
+    if (e.path().empty()) { // The list as a whole.
+      failure.message = "Could not load the models \"" + value + "\": " + e.what();
+      return nullptr;
     }
-    // Instances are told apart by their model's name only; the same model twice would also
-    // make every one of its features ambiguous, so that none would match.
-    for (size_t i = 0; i < models.size(); i++) {
-      for (size_t j = 0; j < i; j++) {
-        if (models[i].name == models[j].name) {
-          failure.code = GST_RESOURCE_ERROR_SETTINGS;
-          failure.message = "Could not load the models \"" + value + "\": two models are named \"" +
-                            models[i].name + "\" (" + sources[j] + " and " + sources[i] +
-                            "); give each model a distinct name (the `name` key of a model file)";
-          return nullptr;
-        }
-      }
-    }
-    return std::make_shared<const pickdetect::Detector>(std::move(models));
+    path = e.path();
+    reason = e.what();
+    kind = e.kind();
   } catch (const std::exception& e) {
     reason = e.what();
-  } catch (...) {
-    reason = "unknown error";
+    kind = pickdetect::file_error_kind(path);
   }
-  failure.code = file_error_code(path);
+  failure.code = resource_error_code(kind);
   if (reason.find(path) != std::string::npos)
     failure.message = "Could not load the model: " + reason;
   else
@@ -593,7 +501,8 @@ static bool load_calibration_file(GstPickDetect* self) {
     } catch (const std::exception& e) {
       const std::string message = std::string("Could not load the calibration: ") + e.what();
       GST_ERROR_OBJECT(self, "%s", message.c_str());
-      post_resource_message(self, GST_MESSAGE_ERROR, file_error_code(path), message,
+      post_resource_message(self, GST_MESSAGE_ERROR,
+                            resource_error_code(pickdetect::file_error_kind(path)), message,
                             "calibration=" + path);
       return false;
     }
@@ -628,6 +537,10 @@ static void warn_heights_ignored(GstPickDetect* self) {
 }
 
 static void reset_tracks(GstPickDetect* self, const char* why);
+static GstFlowReturn attach_threaded_frame(GstPickDetect* self, GstBuffer* buffer,
+                                           const gstpickdetect::FrameInputs& in,
+                                           const GstSegment& segment,
+                                           gstpickdetect::FrameDetection& found);
 
 static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
@@ -681,8 +594,12 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
     threads = static_cast<int>(g_get_num_processors());
   threads = std::max(threads, 1);
   if (threads > 1)
-    priv->workers = std::make_unique<gstpickdetect::OrderedWorkers>(threads);
-  priv->drain_ret = GST_FLOW_OK;
+    priv->frame_threads = std::make_unique<gstpickdetect::FrameThreads>(
+        trans, threads,
+        [self](GstBuffer* buffer, const gstpickdetect::FrameInputs& in, const GstSegment& segment,
+               gstpickdetect::FrameDetection& found) {
+          return attach_threaded_frame(self, buffer, in, segment, found);
+        });
   priv->size_error_posted = false;
   GST_OBJECT_LOCK(self);
   priv->active_threads = threads;
@@ -693,7 +610,7 @@ static gboolean gst_pick_detect_start(GstBaseTransform* trans) {
 
 static gboolean gst_pick_detect_stop(GstBaseTransform* trans) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  self->priv->workers.reset(); // Drops the frames in the works, joins the frame threads.
+  self->priv->frame_threads.reset(); // Drops the frames in the works, joins the threads.
   reset_tracks(self, "stop");
   self->priv->tracked_detector = nullptr;
   self->priv->tracked_width = self->priv->tracked_height = 0;
@@ -756,15 +673,7 @@ static gboolean gst_pick_detect_set_info(GstVideoFilter* filter, GstCaps* incaps
 /* ------------------------------------------------------------------------------------------- */
 /* Per frame                                                                                   */
 
-/// What a frame is processed with, taken as a whole under the lock: the same settings, models
-/// and format from its detection to its metas, whatever is set meanwhile.
-struct FrameInputs {
-  std::shared_ptr<const pickdetect::Detector> detector;
-  std::shared_ptr<const gstpickdetect::FrameFormat> format;
-  gstpickdetect::FrameConfig config;
-};
-
-static bool take_frame_inputs(GstPickDetect* self, FrameInputs& in) {
+static bool take_frame_inputs(GstPickDetect* self, gstpickdetect::FrameInputs& in) {
   GST_OBJECT_LOCK(self);
   in.detector = self->priv->detector;
   in.config = self->priv->config;
@@ -781,18 +690,12 @@ static bool take_frame_inputs(GstPickDetect* self, FrameInputs& in) {
   return true;
 }
 
-static void post_frame_message(GstPickDetect* self, GstStructure* structure) {
-  if (structure)
-    gst_element_post_message(GST_ELEMENT(self),
-                             gst_message_new_element(GST_OBJECT(self), structure));
-}
-
 /// Posts the track and count messages gathered so far, in order. Streaming thread.
 static void post_track_messages(GstPickDetect* self) {
   std::vector<GstStructure*> messages;
   messages.swap(self->priv->tracking.messages);
   for (GstStructure* s : messages)
-    post_frame_message(self, s);
+    gstpickdetect::post_frame_message(GST_ELEMENT(self), s);
 }
 
 /// Ends every track (flush, seek, new segment, new frame size, tracking off, stop) and posts
@@ -810,7 +713,8 @@ static void reset_tracks(GstPickDetect* self, const char* why) {
 }
 
 /// Brings the tracker up to the frame's settings and models; null when not tracking.
-static gstpickdetect::FrameTracking* prepare_tracking(GstPickDetect* self, const FrameInputs& in) {
+static gstpickdetect::FrameTracking* prepare_tracking(GstPickDetect* self,
+                                                      const gstpickdetect::FrameInputs& in) {
   GstPickDetectPrivate* priv = self->priv;
   if (!in.config.tracking) {
     if (priv->tracking_on)
@@ -846,7 +750,7 @@ static gstpickdetect::FrameTracking* prepare_tracking(GstPickDetect* self, const
 /// One frame: everything at once, on the streaming thread (`threads` = 1).
 static GstFlowReturn gst_pick_detect_transform_ip(GstBaseTransform* trans, GstBuffer* buffer) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  FrameInputs in;
+  gstpickdetect::FrameInputs in;
   if (!take_frame_inputs(self, in))
     return GST_FLOW_ERROR;
   GstStructure* message = nullptr;
@@ -854,149 +758,49 @@ static GstFlowReturn gst_pick_detect_transform_ip(GstBaseTransform* trans, GstBu
   const GstFlowReturn ret =
       gstpickdetect::process_frame(GST_ELEMENT(self), buffer, *in.format, in.config, *in.detector,
                                    trans->segment, &message, tracking);
-  post_frame_message(self, message);
+  gstpickdetect::post_frame_message(GST_ELEMENT(self), message);
   post_track_messages(self);
   return ret;
 }
 
-namespace {
-
-/// One frame on a frame thread (`threads` > 1). Owns its buffer until it is handed downstream.
-class FrameJob final : public gstpickdetect::OrderedWorkers::Job {
-public:
-  FrameJob(GstPickDetect* self, GstBuffer* buffer, FrameInputs inputs, const GstSegment& segment)
-      : self_(self), buffer_(buffer), in_(std::move(inputs)), segment_(segment) {}
-  ~FrameJob() override {
-    if (message_)
-      gst_structure_free(message_);
-    if (buffer_)
-      gst_buffer_unref(buffer_);
-  }
-  FrameJob(const FrameJob&) = delete;
-  FrameJob& operator=(const FrameJob&) = delete;
-
-  void run() override {
-    ret_ = gstpickdetect::detect_frame(GST_ELEMENT(self_), buffer_, *in_.format, in_.config,
-                                       *in_.detector, found_);
-  }
-
-  /// Tracks the frame and attaches its metas (in frame order, on the streaming thread), posts
-  /// its messages and hands over the buffer (null when the frame failed).
-  GstBuffer* finish(GstFlowReturn& ret) {
-    if (ret_ == GST_FLOW_OK)
-      ret_ = gstpickdetect::attach_frame(GST_ELEMENT(self_), buffer_, *in_.format, in_.config,
-                                         *in_.detector, segment_, found_, &message_,
-                                         prepare_tracking(self_, in_));
-    post_frame_message(self_, message_);
-    post_track_messages(self_);
-    message_ = nullptr;
-    ret = ret_;
-    GstBuffer* out = ret_ == GST_FLOW_OK ? buffer_ : nullptr;
-    if (out)
-      buffer_ = nullptr;
-    return out;
-  }
-
-private:
-  GstPickDetect* self_; ///< Not owned: the element outlives its workers.
-  GstBuffer* buffer_;
-  FrameInputs in_;
-  GstSegment segment_;
-  GstStructure* message_ = nullptr;
-  gstpickdetect::FrameDetection found_;
-  GstFlowReturn ret_ = GST_FLOW_OK;
-};
-
-} // namespace
-
-/// Pushes every frame still in the works downstream, in order: before a serialized event, so
-/// that events and frames keep their order, and at EOS. Streaming thread.
-static GstFlowReturn drain_frames(GstPickDetect* self) {
-  GstPickDetectPrivate* priv = self->priv;
-  GstFlowReturn result = GST_FLOW_OK;
-  if (!priv->workers)
-    return result;
-  while (std::unique_ptr<gstpickdetect::OrderedWorkers::Job> job =
-             priv->workers->take_oldest(true)) {
-    GstFlowReturn ret = GST_FLOW_OK;
-    GstBuffer* out = static_cast<FrameJob*>(job.get())->finish(ret);
-    if (out && result == GST_FLOW_OK)
-      ret = gst_pad_push(GST_BASE_TRANSFORM_SRC_PAD(self), out);
-    else if (out)
-      gst_buffer_unref(out);
-    if (result == GST_FLOW_OK)
-      result = ret;
-  }
-  return result;
+/// A frame detected on a frame thread (`threads` > 1): tracked, its metas attached and its
+/// messages posted, in frame order on the streaming thread.
+static GstFlowReturn attach_threaded_frame(GstPickDetect* self, GstBuffer* buffer,
+                                           const gstpickdetect::FrameInputs& in,
+                                           const GstSegment& segment,
+                                           gstpickdetect::FrameDetection& found) {
+  GstStructure* message = nullptr;
+  const GstFlowReturn ret =
+      gstpickdetect::attach_frame(GST_ELEMENT(self), buffer, *in.format, in.config, *in.detector,
+                                  segment, found, &message, prepare_tracking(self, in));
+  gstpickdetect::post_frame_message(GST_ELEMENT(self), message);
+  post_track_messages(self);
+  return ret;
 }
 
-/// Drops every frame in the works (flush, stop): those not started are not detected.
-static void discard_frames(GstPickDetect* self) {
-  if (self->priv->workers)
-    self->priv->workers->cancel_all();
-}
-
-/// With `threads` > 1: each input frame goes to a frame thread, and the oldest frame comes out
-/// once done; the streaming thread waits only while every thread is busy. With 1, the base
-/// class's one-frame-at-a-time path (transform_ip).
+/// With `threads` > 1 the frame threads (frame-threads.cpp); with 1, the base class's
+/// one-frame-at-a-time path (transform_ip).
 static GstFlowReturn gst_pick_detect_generate_output(GstBaseTransform* trans, GstBuffer** outbuf) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  GstPickDetectPrivate* priv = self->priv;
   *outbuf = nullptr;
-  if (!priv->workers)
+  if (!self->priv->frame_threads)
     return GST_BASE_TRANSFORM_CLASS(parent_class)->generate_output(trans, outbuf);
-
-  if (priv->drain_ret != GST_FLOW_OK) { // A push while draining failed: say so now.
-    const GstFlowReturn ret = priv->drain_ret;
-    priv->drain_ret = GST_FLOW_OK;
-    gst_buffer_replace(&trans->queued_buf, nullptr);
-    return ret;
-  }
-
-  if (GstBuffer* inbuf = trans->queued_buf) {
-    trans->queued_buf = nullptr;
-    FrameInputs in;
-    if (!take_frame_inputs(self, in)) {
-      gst_buffer_unref(inbuf);
-      return GST_FLOW_ERROR;
-    }
-    GstBuffer* buffer = nullptr; // The input made writable (copied only when shared).
-    const GstFlowReturn ret =
-        GST_BASE_TRANSFORM_CLASS(parent_class)->prepare_output_buffer(trans, inbuf, &buffer);
-    if (buffer != inbuf)
-      gst_buffer_unref(inbuf);
-    if (ret != GST_FLOW_OK || !buffer)
-      return ret != GST_FLOW_OK ? ret : GST_FLOW_ERROR;
-    priv->workers->submit(std::make_unique<FrameJob>(self, buffer, std::move(in), trans->segment));
-  }
-
-  const bool busy = priv->workers->pending() >= static_cast<size_t>(priv->workers->threads());
-  std::unique_ptr<gstpickdetect::OrderedWorkers::Job> job = priv->workers->take_oldest(busy);
-  if (!job)
-    return GST_FLOW_OK; // Nothing finished yet: the next input first.
-  GstFlowReturn ret = GST_FLOW_OK;
-  *outbuf = static_cast<FrameJob*>(job.get())->finish(ret);
-  return ret;
+  return self->priv->frame_threads->generate_output(
+      GST_BASE_TRANSFORM_CLASS(parent_class),
+      [self](gstpickdetect::FrameInputs& in) { return take_frame_inputs(self, in); }, outbuf);
 }
 
 static gboolean gst_pick_detect_sink_event(GstBaseTransform* trans, GstEvent* event) {
   GstPickDetect* self = GST_PICK_DETECT(trans);
-  switch (GST_EVENT_TYPE(event)) {
-  case GST_EVENT_FLUSH_STOP:
-    discard_frames(self);
-    self->priv->drain_ret = GST_FLOW_OK;
+  gstpickdetect::FrameThreads* frame_threads = self->priv->frame_threads.get();
+  if (frame_threads && GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP)
+    frame_threads->flush();
+  else if (frame_threads && GST_EVENT_IS_SERIALIZED(event))
+    frame_threads->drain();
+  if (GST_EVENT_TYPE(event) == GST_EVENT_FLUSH_STOP)
     reset_tracks(self, "flush");
-    break;
-  default:
-    if (GST_EVENT_IS_SERIALIZED(event)) {
-      const GstFlowReturn ret = drain_frames(self);
-      if (ret != GST_FLOW_OK && self->priv->drain_ret == GST_FLOW_OK)
-        self->priv->drain_ret = ret;
-    }
-    if (GST_EVENT_TYPE(event) == GST_EVENT_SEGMENT)
-      reset_tracks(self, "new segment"); // Running times start again.
-    break;
-  }
+  else if (GST_EVENT_TYPE(event) == GST_EVENT_SEGMENT)
+    reset_tracks(self, "new segment"); // Running times start again.
   return GST_BASE_TRANSFORM_CLASS(parent_class)->sink_event(trans, event);
 }
 
@@ -1011,20 +815,8 @@ static gboolean gst_pick_detect_query(GstBaseTransform* trans, GstPadDirection d
   GST_OBJECT_LOCK(self);
   const int threads = self->priv->active_threads;
   GST_OBJECT_UNLOCK(self);
-  const GstVideoInfo* info = &GST_VIDEO_FILTER(self)->in_info;
-  if (threads <= 1 || GST_VIDEO_INFO_FPS_N(info) <= 0)
-    return TRUE;
-  const GstClockTime frame =
-      gst_util_uint64_scale_int(GST_SECOND, GST_VIDEO_INFO_FPS_D(info), GST_VIDEO_INFO_FPS_N(info));
-  const GstClockTime added = frame * static_cast<GstClockTime>(threads - 1);
-  gboolean live = FALSE;
-  GstClockTime min = 0, max = GST_CLOCK_TIME_NONE;
-  gst_query_parse_latency(query, &live, &min, &max);
-  if (GST_CLOCK_TIME_IS_VALID(max))
-    max += added;
-  gst_query_set_latency(query, live, min + added, max);
-  GST_DEBUG_OBJECT(self, "%d frame threads: latency + %" GST_TIME_FORMAT, threads,
-                   GST_TIME_ARGS(added));
+  gstpickdetect::add_frame_thread_latency(GST_OBJECT(self), query, threads,
+                                          GST_VIDEO_FILTER(self)->in_info);
   return TRUE;
 }
 

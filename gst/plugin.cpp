@@ -9,6 +9,7 @@ static gboolean plugin_init(GstPlugin* plugin) {
   return ok;
 }
 
+// The origin is the project's name: it has no public home page to point to.
 GST_PLUGIN_DEFINE(GST_VERSION_MAJOR, GST_VERSION_MINOR, pickdetect,
                   "Detection of multiple object instances for pick-and-place", plugin_init,
-                  PICKDETECT_VERSION, "LGPL", PACKAGE, "https://example.invalid/gst-pickdetect")
+                  PICKDETECT_VERSION, "LGPL", PACKAGE, PACKAGE)

@@ -7,6 +7,7 @@
 #include "scene_explanation.hpp"
 
 #include <pickdetect/error.hpp>
+#include <pickdetect/matching.hpp>
 #include <pickdetect/meanshift.hpp>
 #include <pickdetect/occlusion.hpp>
 #include <pickdetect/pose.hpp>
@@ -71,6 +72,11 @@ Method parse_method(const std::string& name) {
   throw Error("unknown method '" + name + "' (expected voting, ransac-clustered or ransac-all)");
 }
 
+struct Detector::Matchers {
+  Matcher sift;
+  Matcher orb;
+};
+
 Detector::Detector(std::vector<Model> models) : models_(std::move(models)) {
   if (models_.empty())
     throw Error("a detector needs at least one model");
@@ -80,8 +86,8 @@ Detector::Detector(std::vector<Model> models) : models_(std::move(models)) {
         m.principal_points.empty() || m.outline.size() < 3)
       throw Error("model '" + m.name +
                   "' is incomplete (no features, principal points or outline)");
-  sift_matcher_ = Matcher(models_, FeatureKind::Sift);
-  orb_matcher_ = Matcher(models_, FeatureKind::Orb);
+  matchers_ = std::make_shared<const Matchers>(
+      Matchers{Matcher(models_, FeatureKind::Sift), Matcher(models_, FeatureKind::Orb)});
 }
 
 Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const {
@@ -119,9 +125,10 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
   // which product an object is from each instance's own evidence (drop_look_alikes); the
   // baselines and the paper's plain voting reject such features, as the paper does.
   const bool share = s.method == Method::Voting && s.refine;
-  const std::vector<Match> matches = (s.features == FeatureKind::Orb ? orb_matcher_ : sift_matcher_)
-                                         .match(scene.descriptors, s.ratio, s.search,
-                                                share ? Ambiguity::Share : Ambiguity::Reject);
+  const std::vector<Match> matches =
+      (s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift)
+          .match(scene.descriptors, s.ratio, s.search,
+                 share ? Ambiguity::Share : Ambiguity::Reject);
   result.matches = static_cast<int>(matches.size());
   result.timings.matching_ms = ms_since(t);
 

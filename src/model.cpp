@@ -53,6 +53,8 @@ void require_readable(const std::string& path, const char* what) {
   }
 }
 
+} // namespace
+
 bool is_model_file(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -61,6 +63,8 @@ bool is_model_file(const std::string& path) {
     return is_model_file(fs::path(path).replace_extension().string());
   return ext == ".yml" || ext == ".yaml" || ext == ".xml" || ext == ".json";
 }
+
+namespace {
 
 /// The size a PNG or JPEG file declares in its header, read without decoding the picture; none
 /// for other formats or a header that does not say (the decoder decides then).

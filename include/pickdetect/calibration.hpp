@@ -11,6 +11,8 @@
 // towards its y axis.
 #pragma once
 
+#include <pickdetect/export.hpp>
+
 #include <pickdetect/detector.hpp>
 
 #include <opencv2/core.hpp>
@@ -32,7 +34,7 @@ enum class CalibrationKind {
 
 /// A calibrated cell: the camera looking at the work plane. A plain value; load_calibration()
 /// and save_calibration() read and write it.
-struct Calibration {
+struct PICKDETECT_API Calibration {
   CalibrationKind kind = CalibrationKind::CameraPlane;
   cv::Size image_size; ///< Frame size the calibration holds for, in pixels.
   // ---- CameraPlane ----
@@ -60,10 +62,10 @@ struct Calibration {
 
 /// Reads a calibration file (YAML written by save_calibration() or pickdetect-calibrate).
 /// Throws Error naming the file and what was wrong.
-Calibration load_calibration(const std::string& path);
+PICKDETECT_API Calibration load_calibration(const std::string& path);
 
 /// Writes a calibration file (YAML through cv::FileStorage). Throws Error when it cannot.
-void save_calibration(const Calibration& calibration, const std::string& path);
+PICKDETECT_API void save_calibration(const Calibration& calibration, const std::string& path);
 
 /// A chessboard: inner corners per row (width) and per column (height), square side in mm.
 struct ChessboardPattern {
@@ -81,14 +83,16 @@ struct ChessboardView {
 constexpr int kMinChessboardViews = 3;
 
 /// The inner corners of the pattern in the photo, refined to subpixel; empty when not found.
-std::vector<cv::Point2f> find_chessboard(const cv::Mat& grey, const cv::Size& inner_corners);
+PICKDETECT_API std::vector<cv::Point2f> find_chessboard(const cv::Mat& grey,
+                                                        const cv::Size& inner_corners);
 
 /// Camera matrix and distortion from every view, the plane's pose from views[plane_view] (the
 /// photo of the pattern lying on the work plane). Throws Error when there are fewer than
 /// kMinChessboardViews views, when the pattern is not found in one (naming it), or when the
 /// views differ in size.
-Calibration calibrate_chessboard(const std::vector<ChessboardView>& views,
-                                 const ChessboardPattern& pattern, size_t plane_view = 0);
+PICKDETECT_API Calibration calibrate_chessboard(const std::vector<ChessboardView>& views,
+                                                const ChessboardPattern& pattern,
+                                                size_t plane_view = 0);
 
 /// A point whose place is known both in the frame (pixels) and on the plane (mm).
 struct PlanePoint {
@@ -104,8 +108,9 @@ constexpr int kMinPlanePoints = 4;
 /// pose is solved and the result is a CameraPlane calibration; without, a Homography one of
 /// `image_size`. Throws Error for fewer than kMinPlanePoints points or a degenerate set (points
 /// repeated, three or more of them all on one line, in the frame or on the plane).
-Calibration calibrate_points(const std::vector<PlanePoint>& points, const cv::Size& image_size,
-                             const Calibration* camera = nullptr);
+PICKDETECT_API Calibration calibrate_points(const std::vector<PlanePoint>& points,
+                                            const cv::Size& image_size,
+                                            const Calibration* camera = nullptr);
 
 /// An instance's place on the plane, in millimetres.
 struct PlaneInstance {
@@ -117,7 +122,8 @@ struct PlaneInstance {
 
 /// The instance's centre, grasp point, outline and angle on the plane, its top face lying
 /// `height_mm` above it (the model's height). Throws Error as Calibration::to_plane().
-PlaneInstance locate_on_plane(const Instance& instance, const Calibration& calibration,
-                              double height_mm = 0.0);
+PICKDETECT_API PlaneInstance locate_on_plane(const Instance& instance,
+                                             const Calibration& calibration,
+                                             double height_mm = 0.0);
 
 } // namespace pickdetect

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #pragma once
 
-#include <pickdetect/matching.hpp>
+#include <pickdetect/export.hpp>
+
+#include <pickdetect/features.hpp>
 #include <pickdetect/model.hpp>
 
 #include <opencv2/core.hpp>
@@ -19,9 +21,9 @@ enum class Method {
   RansacAll,       ///< Baseline: one RANSAC homography over all matches (one instance at most).
 };
 
-const char* method_name(Method method);
+PICKDETECT_API const char* method_name(Method method);
 /// Parses "voting", "ransac-clustered" or "ransac-all"; throws Error on anything else.
-Method parse_method(const std::string& name);
+PICKDETECT_API Method parse_method(const std::string& name);
 
 /// The numbers that matter, with their units. Defaults are the element's property defaults.
 struct Settings {
@@ -93,7 +95,7 @@ struct Detection {
 
 /// Finds every instance of its models in grey frames. Immutable after construction, so one
 /// detector may serve several threads; swapping models means building a new detector.
-class Detector {
+class PICKDETECT_API Detector {
 public:
   explicit Detector(std::vector<Model> models);
 
@@ -111,9 +113,10 @@ private:
   Detection detect_scene(const Features& scene, const cv::Size& frame_size,
                          const Settings& settings, const cv::Mat& grey) const;
 
+  struct Matchers; ///< The search indices over the models' features (src/, internal).
+
   std::vector<Model> models_;
-  Matcher sift_matcher_;
-  Matcher orb_matcher_;
+  std::shared_ptr<const Matchers> matchers_; ///< Shared by copies: a detector is immutable.
 };
 
 } // namespace pickdetect

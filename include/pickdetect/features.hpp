@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #pragma once
 
+#include <pickdetect/export.hpp>
+
 #include <opencv2/core.hpp>
 
 #include <string>
@@ -14,9 +16,9 @@ enum class FeatureKind {
   Orb,  ///< ORB: oriented FAST corners with binary descriptors, ten times cheaper or more.
 };
 
-const char* feature_name(FeatureKind kind);
+PICKDETECT_API const char* feature_name(FeatureKind kind);
 /// Parses "sift" or "orb"; throws Error on anything else.
-FeatureKind parse_features(const std::string& name);
+PICKDETECT_API FeatureKind parse_features(const std::string& name);
 
 /// Keypoints and their descriptors, one row per keypoint: CV_32F for SIFT, CV_8U for ORB.
 struct Features {
@@ -32,15 +34,15 @@ constexpr double kSiftContrastThreshold = 0.04;
 /// lie. Positions are in the picture's pixels with pixel centres on integers.
 /// `contrast_threshold`: SIFT's (lower keeps weaker extrema too; see exposure_contrast_share;
 /// negative or NaN: kSiftContrastThreshold); ORB ignores it.
-Features extract_features(const cv::Mat& grey, const cv::Mat& mask = cv::Mat(),
-                          FeatureKind kind = FeatureKind::Sift,
-                          double contrast_threshold = kSiftContrastThreshold);
+PICKDETECT_API Features extract_features(const cv::Mat& grey, const cv::Mat& mask = cv::Mat(),
+                                         FeatureKind kind = FeatureKind::Sift,
+                                         double contrast_threshold = kSiftContrastThreshold);
 
 /// Features of `grey` shrunk by `scale` (0 < scale <= 1, area interpolation), with positions and
 /// sizes carried back to `grey`'s pixels.
-Features extract_features_scaled(const cv::Mat& grey, double scale,
-                                 FeatureKind kind = FeatureKind::Sift,
-                                 double contrast_threshold = kSiftContrastThreshold);
+PICKDETECT_API Features extract_features_scaled(const cv::Mat& grey, double scale,
+                                                FeatureKind kind = FeatureKind::Sift,
+                                                double contrast_threshold = kSiftContrastThreshold);
 
 /// How much of SIFT's contrast threshold (kSiftContrastThreshold) suits a frame of this
 /// exposure (CV_8UC1; the detector's default, Settings::contrast_threshold 0): 1 for a
@@ -49,7 +51,13 @@ Features extract_features_scaled(const cv::Mat& grey, double scale,
 /// one, 0.25 at the least. In a frame taken with a quarter of the light every contrast is a
 /// quarter as strong, the objects' too: with OpenCV's fixed threshold SIFT would find few of
 /// their keypoints. Model pictures keep the full threshold.
-double exposure_contrast_share(const cv::Mat& grey);
+PICKDETECT_API double exposure_contrast_share(const cv::Mat& grey);
+
+/// How the matching searches the two nearest model descriptors of each scene descriptor.
+enum class Search {
+  KdTree,     ///< FLANN's randomised kd-trees, built with a fixed seed: fast, deterministic.
+  BruteForce, ///< Every pair compared: exact, several times slower on large frames.
+};
 
 /// One simulated view of a model picture (ASIFT's view simulation): the face turned by `phi`
 /// degrees in the picture plane, then tilted away from the camera so that it looks `tilt` times
@@ -62,11 +70,12 @@ struct TiltedView {
 /// The views that cover faces seen up to `max_tilt_deg` off their normal (ASIFT's sampling:
 /// tilts in steps of sqrt(2), turns in steps of 72 / tilt degrees over half a turn); none
 /// below 45 degrees, which the picture's own SIFT features already survive.
-std::vector<TiltedView> tilted_views(double max_tilt_deg);
+PICKDETECT_API std::vector<TiltedView> tilted_views(double max_tilt_deg);
 
 /// SIFT features of `grey` (CV_8UC1; `mask` as for extract_features) seen in `view`, with
 /// their positions, orientations and sizes carried back into the picture's pixels.
-Features features_of_view(const cv::Mat& grey, const cv::Mat& mask, const TiltedView& view,
+PICKDETECT_API Features features_of_view(const cv::Mat& grey, const cv::Mat& mask,
+                                        const TiltedView& view,
                           double contrast_threshold = kSiftContrastThreshold);
 
 /// A correspondence between a model keypoint and a scene keypoint that passed the 2NN test.

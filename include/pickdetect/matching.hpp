@@ -15,12 +15,6 @@ class Index;
 
 namespace pickdetect {
 
-/// How the two nearest model descriptors of each scene descriptor are searched.
-enum class Search {
-  KdTree,     ///< FLANN's randomised kd-trees, built with a fixed seed: fast, deterministic.
-  BruteForce, ///< Every pair compared: exact, several times slower on large frames.
-};
-
 /// What the matching does with a scene feature that fits several models about equally well
 /// (look-alike products share parts of their design).
 enum class Ambiguity {

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #pragma once
 
+#include <pickdetect/export.hpp>
+
 #include <pickdetect/features.hpp>
 
 #include <opencv2/core.hpp>
@@ -48,18 +50,32 @@ constexpr int kMinModelKeypoints = 12;
 /// otherwise the whole picture is the object. Principal points default to the centre and the
 /// four corners of the object's bounding box, the outline to the alpha contour or the picture's
 /// rectangle. Throws Error naming the file when it cannot be read or yields too few keypoints.
-Model model_from_picture(const std::string& picture_path, const std::string& name = {});
+PICKDETECT_API Model model_from_picture(const std::string& picture_path,
+                                        const std::string& name = {});
 
 /// Loads a model file (YAML, see README) or, for any other file, a plain picture with default
 /// points. Throws Error naming the file and the reason.
-Model load_model(const std::string& path);
+PICKDETECT_API Model load_model(const std::string& path);
 
 /// Writes a model file. The picture path is stored relative to the file's folder when it lies
 /// below it. With cache_features the keypoints and descriptors are stored too, so that loading
 /// does not recompute them.
-void save_model(const Model& model, const std::string& path, bool cache_features = true);
+PICKDETECT_API void save_model(const Model& model, const std::string& path,
+                               bool cache_features = true);
 
 /// Computes the model's SIFT and ORB features from its picture and mask (used by the loaders).
-void compute_model_features(Model& model);
+PICKDETECT_API void compute_model_features(Model& model);
+
+/// Whether load_model reads `path` as a model file (YAML, JSON or XML by its extension, also
+/// gzipped) rather than as a picture.
+PICKDETECT_API bool is_model_file(const std::string& path);
+
+/// Loads every model a model list names: model files, pictures and model-set files (a model
+/// file with a `models` list of model files or pictures and no `image`; relative entries are
+/// relative to the set's folder), separated by commas, blanks around each entry ignored. Throws
+/// Error when any cannot be loaded (its path() the file being read and its kind() why), when an
+/// entry is empty, when a set lists another set, or when two models share a name (path() empty
+/// for the list as a whole).
+PICKDETECT_API std::vector<Model> load_models(const std::string& list);
 
 } // namespace pickdetect

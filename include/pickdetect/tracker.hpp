@@ -52,7 +52,7 @@ struct CountLine {
 
 /// Parses "x1,y1,x2,y2" (pixels); nullopt for an empty string; throws Error when malformed or
 /// when both ends are the same point.
-std::optional<CountLine> parse_count_line(const std::string& text);
+PICKDETECT_API std::optional<CountLine> parse_count_line(const std::string& text);
 
 /// Why a track ended.
 enum class TrackEnd {
@@ -63,7 +63,7 @@ enum class TrackEnd {
   ModelRemoved, ///< Its model left the model set.
 };
 /// "left-view", "vanished", "timeout", "reset", "model-removed".
-const char* track_end_name(TrackEnd reason);
+PICKDETECT_API const char* track_end_name(TrackEnd reason);
 
 /// One instance of a frame with its track.
 struct TrackedInstance {
@@ -117,7 +117,7 @@ struct TrackedFrame {
 /// of the same model are paired with tracks greedily by cost (predicted centre distance in
 /// object sizes, plus outline overlap and angle), within a gate, so that a fast belt with no
 /// overlap between frames keeps its ids.
-class Tracker {
+class PICKDETECT_API Tracker {
 public:
   explicit Tracker(TrackerSettings settings = TrackerSettings());
 

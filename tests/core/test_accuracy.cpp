@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Accuracy guard: the voting method on a small built-in set of heaps must keep the targets
 // (object precision >= 0.99, recall >= 0.98, centre error mean <= 0.5 px, p95 <= 1.5 px).
-#include "../common/scene.hpp"
+#include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Calibration (issue 19): chessboards rendered through a known camera give it back; points of
 // known plane coordinates give the plane; files round-trip; bad input is refused by name.
-#include "common/camera_scene.hpp"
+#include "support/camera_scene.hpp"
 
 #include <pickdetect/calibration.hpp>
 #include <pickdetect/error.hpp>

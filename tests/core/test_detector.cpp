@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // The detector on scenes built from OpenCV's box.png at known poses.
-#include "../common/box.hpp"
-#include "../common/scene.hpp"
+#include "../support/box.hpp"
+#include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
+#include <pickdetect/pose.hpp>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -216,4 +217,30 @@ TEST(Method, NamesRoundTripAndUnknownNamesAreRefused) {
   for (Method m : {Method::Voting, Method::RansacClustered, Method::RansacAll})
     EXPECT_EQ(parse_method(method_name(m)), m);
   EXPECT_THROW(parse_method("hough"), Error);
+}
+
+TEST(Detector, OrbAndReducedDetectionFindTheBoxes) {
+  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  const Detector detector({model});
+  const cv::Mat box =
+      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/box.png", cv::IMREAD_GRAYSCALE);
+  cv::Mat scene = test_scene::plain_background({900, 700});
+  const std::vector<test_scene::Pose> poses = {{{250.f, 250.f}, 30.0, 1.0},
+                                               {{620.f, 430.f}, 200.0, 0.9}};
+  test_scene::paste(scene, box, poses);
+  Settings orb;
+  orb.features = FeatureKind::Orb;
+  Settings reduced;
+  reduced.detection_scale = 0.6;
+  for (const Settings& s : {orb, reduced}) {
+    const Detection d = detector.detect(scene, s);
+    ASSERT_EQ(d.instances.size(), 2u) << feature_name(s.features) << " at " << s.detection_scale;
+    for (const test_scene::Pose& p : poses) {
+      double best = 1e9;
+      for (const Instance& i : d.instances)
+        best = std::min(best, static_cast<double>(
+                                  std::hypot(i.center.x - p.center.x, i.center.y - p.center.y)));
+      EXPECT_LE(best, 1.5) << feature_name(s.features) << " at " << s.detection_scale;
+    }
+  }
 }

@@ -195,3 +195,37 @@ TEST_F(ModelFiles, AMaxTiltOutOfRangeIsRefusedByName) {
   expect_refused(write("n.yml", "%YAML:1.0\nimage: \"" + kData + "/box.png\"\nmax_tilt: steep\n"),
                  {"n.yml", "'max_tilt' must be a number"});
 }
+
+// A model list: commas, model sets relative to their folder; its errors say which file and why.
+TEST_F(ModelFiles, ModelListReadsSetsRelativeToThemAndClassifiesItsErrors) {
+  fs::copy_file(kData + "/box.png", path("crate.png"));
+  const std::string set = write("set.yml", "%YAML:1.0\nmodels: [crate.png]\n");
+  const std::vector<Model> models = load_models(" " + kData + "/box.png ,\t" + set);
+  ASSERT_EQ(models.size(), 2u);
+  EXPECT_EQ(models[0].name, "box");
+  EXPECT_EQ(models[1].name, "crate");
+
+  auto refusal = [](const std::string& list) -> Error {
+    try {
+      load_models(list);
+    } catch (const Error& e) {
+      return e;
+    }
+    ADD_FAILURE() << "loading '" << list << "' should have failed";
+    return Error("");
+  };
+  const Error missing = refusal(write("missing.yml", "%YAML:1.0\nmodels: [gone.png]\n"));
+  EXPECT_EQ(missing.kind(), ErrorKind::NotFound) << missing.what();
+  EXPECT_EQ(missing.path(), path("gone.png"));
+  const Error folder = refusal(dir_.string());
+  EXPECT_EQ(folder.kind(), ErrorKind::CannotRead) << folder.what();
+  const Error nested = refusal(write("nested.yml", "%YAML:1.0\nmodels: [set.yml]\n"));
+  EXPECT_EQ(nested.kind(), ErrorKind::Invalid) << nested.what();
+  EXPECT_NE(std::string(nested.what()).find("lists another model set"), std::string::npos);
+  const Error twice = refusal(set + "," + path("crate.png"));
+  EXPECT_EQ(twice.path(), "") << twice.what();
+  EXPECT_NE(std::string(twice.what()).find("two models are named \"crate\""), std::string::npos);
+  const Error empty = refusal(kData + "/box.png,,");
+  EXPECT_EQ(empty.path(), "") << empty.what();
+  EXPECT_NE(std::string(empty.what()).find("empty entry"), std::string::npos);
+}

@@ -1,9 +1,15 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Which one to pick: stacks in both orders, three levels, touching neighbours, the frame edge.
-#include "../common/box.hpp"
-#include "../common/scene.hpp"
+#include "../support/box.hpp"
+#include "common/scene.hpp"
 
+#include <pickdetect/matching.hpp>
+#include <pickdetect/meanshift.hpp>
+#include <pickdetect/occlusion.hpp>
 #include <pickdetect/pickdetect.hpp>
+#include <pickdetect/pose.hpp>
+#include <pickdetect/ransac.hpp>
+#include <pickdetect/voting.hpp>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -229,4 +235,12 @@ TEST(Occlusion, AFrameThatIsNotGreyIsRefusedByName) {
   }
   const cv::Mat small(300, 400, CV_8UC1, cv::Scalar(90));
   EXPECT_THROW(assess_occlusion(found, box_detector().models(), {800, 600}, small), Error);
+}
+
+TEST(Occlusion, OverlapAreaOfCrossingAndTouchingOutlines) {
+  const std::vector<cv::Point2f> a = {{0, 0}, {100, 0}, {100, 100}, {0, 100}};
+  const std::vector<cv::Point2f> b = {{50, 50}, {150, 50}, {150, 150}, {50, 150}};
+  const std::vector<cv::Point2f> touching = {{100, 0}, {200, 0}, {200, 100}, {100, 100}};
+  EXPECT_NEAR(overlap_area(a, b), 2500.0, 1e-3);
+  EXPECT_NEAR(overlap_area(a, touching), 0.0, 1e-3);
 }

@@ -2,10 +2,16 @@
 // Packed rows and tilted faces: one visible surface is one object, and a face seen far off its
 // normal is placed by all of its evidence.
 #include "../../src/scene_explanation.hpp"
-#include "../common/box.hpp"
-#include "../common/scene.hpp"
+#include "../support/box.hpp"
+#include "common/scene.hpp"
 
+#include <pickdetect/matching.hpp>
+#include <pickdetect/meanshift.hpp>
+#include <pickdetect/occlusion.hpp>
 #include <pickdetect/pickdetect.hpp>
+#include <pickdetect/pose.hpp>
+#include <pickdetect/ransac.hpp>
+#include <pickdetect/voting.hpp>
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Faces seen far off their normal: the model's simulated tilted views find them, and their
 // features land where the picture shows them.
-#include "../common/box.hpp"
-#include "../common/scene.hpp"
+#include "../support/box.hpp"
+#include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
 

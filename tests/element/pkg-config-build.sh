@@ -13,4 +13,4 @@ export PKG_CONFIG_PATH
 flags=$(pkg-config --cflags --libs gstreamer-pickdetect-meta-1.0)
 echo "pkg-config: $flags"
 ${CC:-cc} -std=c11 -Wall -Wextra -Werror -o "$output" "$source" $flags -lm
-LD_LIBRARY_PATH="$build_root/gst${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" "$output"
+LD_LIBRARY_PATH="$build_root/gst-libs/gst/pickdetect${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" "$output"

@@ -14,7 +14,9 @@
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/video/video.h>
 
-#include "../common/harness.hpp"
+#include "../support/harness.hpp"
+#include "common/scene.hpp"
+#include "common/video-buffer.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -52,83 +54,34 @@ const pickdetect::Model& box_model() {
   return model;
 }
 
-/// scene = scale * R(angle) * (model - model centre) + pose centre, clockwise on screen.
-cv::Mat pose_matrix(const Pose& pose, cv::Point2f model_centre) {
-  const double a = pose.angle * CV_PI / 180.0;
-  const double c = std::cos(a) * pose.scale, s = std::sin(a) * pose.scale;
-  cv::Mat m = (cv::Mat_<double>(2, 3) << c, -s, 0.0, s, c, 0.0);
-  m.at<double>(0, 2) = pose.x - (c * model_centre.x - s * model_centre.y);
-  m.at<double>(1, 2) = pose.y - (s * model_centre.x + c * model_centre.y);
-  return m;
+/// The box's pose in the scene helpers' terms (about the picture's centre, the box's centre).
+pickdetect::test_scene::Pose scene_pose(const Pose& pose) {
+  return {cv::Point2f(static_cast<float>(pose.x), static_cast<float>(pose.y)), pose.angle,
+          pose.scale};
 }
 
 /// A grey scene of the given size with the box at kPoses (those that fit), and the truth.
 cv::Mat make_scene(cv::Size size, std::vector<Truth>* truth, bool with_boxes = true) {
-  cv::Mat noise(size, CV_8UC1);
-  cv::RNG rng(1234);
-  rng.fill(noise, cv::RNG::UNIFORM, 0, 40);
-  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
-  cv::Mat scene = noise + cv::Scalar(100);
+  cv::Mat scene = pickdetect::test_scene::smooth_noise_background(size);
   if (!with_boxes)
     return scene;
-
-  const pickdetect::Model& model = box_model();
-  const cv::Point2f centre = model.principal_points.at(0);
-  const cv::Mat ones(model.image.size(), CV_8UC1, cv::Scalar(255));
   for (const Pose& pose : kPoses) {
-    const cv::Mat m = pose_matrix(pose, centre);
-    cv::Mat warped, mask;
-    cv::warpAffine(model.image, warped, m, size, cv::INTER_LINEAR);
-    cv::warpAffine(ones, mask, m, size, cv::INTER_NEAREST);
-    warped.copyTo(scene, mask);
+    pickdetect::test_scene::paste(scene, box_model().image, {scene_pose(pose)});
     if (truth)
       truth->push_back(Truth{cv::Point2d(pose.x, pose.y), pose.angle, pose.scale});
   }
   return scene;
 }
 
-/// The grey scene in `format`: R = G = B = grey for RGB, Y = grey and neutral chroma for YUV,
-/// so every format carries the same grey picture. Strides are GStreamer's defaults.
+/// The grey scene in `format` (see pickdetect::tools::video_buffer), GStreamer's strides.
 GstBuffer* scene_buffer(const cv::Mat& grey, const char* format) {
-  GstVideoInfo info;
-  fail_unless(
-      gst_video_info_set_format(&info, gst_video_format_from_string(format), grey.cols, grey.rows));
-  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
-  GstVideoFrame frame;
-  fail_unless(gst_video_frame_map(&frame, &info, buffer, GST_MAP_WRITE));
-  const GstVideoFormatInfo* finfo = info.finfo;
-  if (GST_VIDEO_FORMAT_INFO_IS_RGB(finfo)) {
-    const int pstride = GST_VIDEO_FRAME_COMP_PSTRIDE(&frame, 0);
-    const int alpha =
-        GST_VIDEO_FORMAT_INFO_HAS_ALPHA(finfo) ? GST_VIDEO_FRAME_COMP_POFFSET(&frame, 3) : -1;
-    for (int y = 0; y < grey.rows; y++) {
-      guint8* row = static_cast<guint8*>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) +
-                    y * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0);
-      for (int x = 0; x < grey.cols; x++) {
-        std::memset(row + x * pstride, grey.at<guint8>(y, x), pstride);
-        if (alpha >= 0)
-          row[x * pstride + alpha] = 255;
-      }
-    }
-  } else {
-    for (int y = 0; y < grey.rows; y++)
-      std::memcpy(static_cast<guint8*>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) +
-                      y * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0),
-                  grey.ptr(y), grey.cols);
-    for (guint p = 1; p < GST_VIDEO_FRAME_N_PLANES(&frame); p++)
-      std::memset(GST_VIDEO_FRAME_PLANE_DATA(&frame, p), 128,
-                  GST_VIDEO_FRAME_PLANE_STRIDE(&frame, p) *
-                      GST_VIDEO_FRAME_COMP_HEIGHT(&frame, p == 1 ? 1 : 2));
-  }
-  gst_video_frame_unmap(&frame);
-  GST_BUFFER_PTS(buffer) = 0;
-  GST_BUFFER_DURATION(buffer) = GST_SECOND / 30;
+  GstBuffer* buffer = pickdetect::tools::video_buffer(grey, format);
+  fail_unless(buffer != nullptr, "no %s buffer", format);
   return buffer;
 }
 
 std::string caps_string(const char* format, cv::Size size) {
-  return "video/x-raw,format=" + std::string(format) + ",width=" + std::to_string(size.width) +
-         ",height=" + std::to_string(size.height) + ",framerate=30/1";
+  return pickdetect::tools::caps_string(format, size);
 }
 
 /// A harness around a lone pickdetect (h->element is the element) with the box model.
@@ -715,13 +668,7 @@ GST_END_TEST;
 
 /// A picture pasted into `scene` (grey) at `pose`, about the picture's centre.
 static void paste(cv::Mat& scene, const cv::Mat& picture, const Pose& pose) {
-  const cv::Point2f centre(picture.cols / 2.0f, picture.rows / 2.0f);
-  const cv::Mat m = pose_matrix(pose, centre);
-  const cv::Mat ones(picture.size(), CV_8UC1, cv::Scalar(255));
-  cv::Mat warped, mask;
-  cv::warpAffine(picture, warped, m, scene.size(), cv::INTER_LINEAR);
-  cv::warpAffine(ones, mask, m, scene.size(), cv::INTER_NEAREST);
-  warped.copyTo(scene, mask);
+  pickdetect::test_scene::paste(scene, picture, {scene_pose(pose)});
 }
 
 /// A look-alike of the box: box.png with its right half replaced by a piece of baboon.jpg, so

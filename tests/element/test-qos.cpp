@@ -11,7 +11,8 @@
 //                       with should_fail, so that this test is shown able to fail)
 //
 // OpenCV comes before gstcheck.h, whose `fail` macro would clash with OpenCV's identifiers.
-#include "../common/scene.hpp"
+#include "common/scene.hpp"
+#include "common/video-buffer.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -93,9 +94,7 @@ std::vector<GstBuffer*> make_frames(int count) {
           {cv::Point2f(rng.uniform(120.f, kWidth - 120.f), rng.uniform(120.f, kHeight - 120.f)),
            rng.uniform(0.0, 360.0), rng.uniform(0.5, 0.7)});
     pickdetect::test_scene::paste(scene, box, poses);
-    GstBuffer* buffer =
-        gst_buffer_new_allocate(nullptr, static_cast<gsize>(kWidth) * kHeight, nullptr);
-    gst_buffer_fill(buffer, 0, scene.data, static_cast<gsize>(kWidth) * kHeight);
+    GstBuffer* buffer = pickdetect::tools::video_buffer(scene, "GRAY8");
     frames.push_back(buffer);
   }
   return frames;
@@ -131,9 +130,8 @@ GST_START_TEST(test_late_frames_are_dropped) {
   GstElement* detect = gst_bin_get_by_name(GST_BIN(pipeline), "detect");
   GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
   g_object_set(detect, "model", kBoxPath.c_str(), "qos", g_qos ? TRUE : FALSE, nullptr);
-  GstCaps* caps = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, "GRAY8", "width",
-                                      G_TYPE_INT, kWidth, "height", G_TYPE_INT, kHeight,
-                                      "framerate", GST_TYPE_FRACTION, 30, 1, nullptr);
+  GstCaps* caps = gst_caps_from_string(
+      pickdetect::tools::caps_string("GRAY8", cv::Size(kWidth, kHeight)).c_str());
   g_object_set(src, "caps", caps, nullptr);
   gst_caps_unref(caps);
 

@@ -3,7 +3,8 @@
 // camera with lens distortion, of boxes whose top face lies a known height above the plane; the
 // pickdetectjson element's lines against the metas, field by field; bad calibration files.
 // OpenCV comes before gstcheck.h, whose `fail` macro would clash with OpenCV's identifiers.
-#include "../common/camera_scene.hpp"
+#include "../support/camera_scene.hpp"
+#include "common/video-buffer.hpp"
 
 #include <pickdetect/calibration.hpp>
 
@@ -70,16 +71,14 @@ cv::Mat box_picture() {
 }
 
 GstBuffer* gray_buffer(const cv::Mat& grey, GstClockTime pts) {
-  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, grey.total(), nullptr);
-  gst_buffer_fill(buffer, 0, grey.data, grey.total());
+  GstBuffer* buffer = pickdetect::tools::video_buffer(grey, "GRAY8");
   GST_BUFFER_PTS(buffer) = pts;
   GST_BUFFER_DURATION(buffer) = GST_SECOND / 10;
   return buffer;
 }
 
 std::string gray_caps(const cv::Size& size) {
-  return "video/x-raw,format=GRAY8,width=" + std::to_string(size.width) +
-         ",height=" + std::to_string(size.height) + ",framerate=10/1";
+  return pickdetect::tools::caps_string("GRAY8", size, 10);
 }
 
 /// The frame through pickdetect with the cell's calibration and model: the annotated buffer.

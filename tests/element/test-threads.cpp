@@ -4,14 +4,15 @@
 // frames around them, nothing left behind by flushes, EOS or stops, and the added latency
 // reported.
 // OpenCV comes before gstcheck.h, whose `fail` macro would clash with OpenCV's identifiers.
-#include "../common/scene.hpp"
+#include "common/scene.hpp"
+#include "common/video-buffer.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <gst/check/gstcheck.h>
 #include <gst/check/gstharness.h>
 
-#include "../common/harness.hpp"
+#include "../support/harness.hpp"
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/video/video.h>
 
@@ -50,21 +51,14 @@ cv::Mat frame_picture(int i, cv::Size size) {
 }
 
 GstBuffer* gray_buffer(const cv::Mat& grey, int index) {
-  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, grey.total(), nullptr);
-  GstMapInfo map;
-  fail_unless(gst_buffer_map(buffer, &map, GST_MAP_WRITE));
-  for (int y = 0; y < grey.rows; y++)
-    std::memcpy(map.data + static_cast<size_t>(y) * grey.cols, grey.ptr(y), grey.cols);
-  gst_buffer_unmap(buffer, &map);
+  GstBuffer* buffer = pickdetect::tools::video_buffer(grey, "GRAY8");
   GST_BUFFER_PTS(buffer) = kFrameDuration * index;
   GST_BUFFER_DURATION(buffer) = kFrameDuration;
   return buffer;
 }
 
 std::string gray_caps(cv::Size size) {
-  // Widths divisible by 4: GRAY8 rows then need no padding, as gray_buffer writes them.
-  return "video/x-raw,format=GRAY8,width=" + std::to_string(size.width) +
-         ",height=" + std::to_string(size.height) + ",framerate=30/1";
+  return pickdetect::tools::caps_string("GRAY8", size);
 }
 
 GstHarness* threads_harness(int threads) {

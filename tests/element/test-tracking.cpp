@@ -3,14 +3,14 @@
 // stable across frames in every place they are written, the same with frame threads, counts,
 // and what the stream events do to the tracks (docs/tracking.md).
 // OpenCV comes before gstcheck.h, whose `fail` macro would clash with OpenCV's identifiers.
-#include "../common/scene.hpp"
+#include "common/scene.hpp"
 
 #include <opencv2/imgcodecs.hpp>
 
 #include <gst/check/gstcheck.h>
 #include <gst/check/gstharness.h>
 
-#include "../common/harness.hpp"
+#include "../support/harness.hpp"
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/video/video.h>
 

@@ -15,7 +15,9 @@
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/video/video.h>
 
-#include "../common/harness.hpp"
+#include "../support/harness.hpp"
+#include "common/scene.hpp"
+#include "common/video-buffer.hpp"
 
 #include <atomic>
 #include <cerrno>
@@ -47,103 +49,42 @@ const pickdetect::Model& box_model() {
 
 /// A grey scene: smooth noise around 100 with the box pasted at each pose.
 cv::Mat make_scene(cv::Size size, const std::vector<Pose>& poses, int seed = 1234) {
-  cv::Mat noise(size, CV_8UC1);
-  cv::RNG rng(seed);
-  rng.fill(noise, cv::RNG::UNIFORM, 0, 40);
-  cv::GaussianBlur(noise, noise, cv::Size(0, 0), 2.0);
-  cv::Mat scene = noise + cv::Scalar(100);
-  const pickdetect::Model& model = box_model();
-  const cv::Point2f c = model.principal_points.at(0);
-  const cv::Mat ones(model.image.size(), CV_8UC1, cv::Scalar(255));
-  for (const Pose& p : poses) {
-    const double a = p.angle * CV_PI / 180.0;
-    const double ca = std::cos(a) * p.scale, sa = std::sin(a) * p.scale;
-    const cv::Mat m = (cv::Mat_<double>(2, 3) << ca, -sa, p.x - (ca * c.x - sa * c.y), sa, ca,
-                       p.y - (sa * c.x + ca * c.y));
-    cv::Mat warped, mask;
-    cv::warpAffine(model.image, warped, m, size, cv::INTER_LINEAR);
-    cv::warpAffine(ones, mask, m, size, cv::INTER_NEAREST);
-    warped.copyTo(scene, mask);
-  }
+  cv::Mat scene = pickdetect::test_scene::smooth_noise_background(size, seed);
+  for (const Pose& p : poses)
+    pickdetect::test_scene::paste(
+        scene, box_model().image,
+        {{cv::Point2f(static_cast<float>(p.x), static_cast<float>(p.y)), p.angle, p.scale}});
   return scene;
 }
 
 enum class Content { Black, White, Noise, Scene };
 
-/// Padding around every plane (bytes are 0xA5 there) to check nothing is read or written out of
-/// the picture.
-constexpr guint8 kCanary = 0xA5;
+using pickdetect::tools::kCanary;
 
 /// A buffer of `format` at the size of `grey` (or w x h for the flat contents). With `pad`,
-/// planes get padding on all sides and wide strides, described by a GstVideoMeta; the padding is
-/// filled with kCanary. Scene: R = G = B = grey, or Y = grey with neutral chroma.
+/// planes get padding on all sides and wide strides, described by a GstVideoMeta; the padding
+/// holds kCanary (see pickdetect::tools::video_buffer). Scene: R = G = B = grey, or Y = grey
+/// with neutral chroma.
 GstBuffer* make_buffer(const char* format, int width, int height, Content content, bool pad,
                        const cv::Mat& grey = cv::Mat(), GstVideoInfo* info_out = nullptr) {
-  GstVideoInfo info;
-  fail_unless(gst_video_info_set_format(&info, gst_video_format_from_string(format), width, height),
-              "%s %dx%d", format, width, height);
-  if (pad) {
-    GstVideoAlignment align;
-    gst_video_alignment_reset(&align);
-    align.padding_top = 3;
-    align.padding_bottom = 5;
-    align.padding_left = 6; // Must be a multiple of the chroma subsampling.
-    align.padding_right = 10;
-    for (guint p = 0; p < GST_VIDEO_MAX_PLANES; p++)
-      align.stride_align[p] = 63; // Strides rounded up to 64 bytes.
-    fail_unless(gst_video_info_align(&info, &align));
+  const cv::Size size(width, height);
+  const auto layout = pad ? pickdetect::tools::Layout::Padded : pickdetect::tools::Layout::Default;
+  GstBuffer* buffer = nullptr;
+  switch (content) {
+  case Content::Noise:
+    buffer = pickdetect::tools::noise_video_buffer(format, size, layout, info_out);
+    break;
+  case Content::Scene:
+    buffer = pickdetect::tools::video_buffer(grey, format, layout, info_out);
+    break;
+  case Content::Black:
+  case Content::White:
+    buffer = pickdetect::tools::video_buffer(
+        cv::Mat(size, CV_8UC1, cv::Scalar(content == Content::White ? 255 : 0)), format, layout,
+        info_out);
+    break;
   }
-  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
-  gst_buffer_memset(buffer, 0, kCanary, GST_VIDEO_INFO_SIZE(&info));
-  if (pad)
-    gst_buffer_add_video_meta_full(buffer, GST_VIDEO_FRAME_FLAG_NONE, GST_VIDEO_INFO_FORMAT(&info),
-                                   width, height, GST_VIDEO_INFO_N_PLANES(&info), info.offset,
-                                   info.stride);
-  GstVideoFrame frame;
-  fail_unless(gst_video_frame_map(&frame, &info, buffer, GST_MAP_WRITE));
-  cv::RNG rng(static_cast<uint64>(width) * 7919 + height);
-  const bool rgb = GST_VIDEO_FORMAT_INFO_IS_RGB(info.finfo);
-  for (guint p = 0; p < GST_VIDEO_FRAME_N_PLANES(&frame); p++) {
-    // Row bytes and rows of the plane, from its first component.
-    int comp[GST_VIDEO_MAX_COMPONENTS];
-    gst_video_format_info_component(info.finfo, p, comp);
-    const int rows = GST_VIDEO_FRAME_COMP_HEIGHT(&frame, comp[0]);
-    const int row_bytes =
-        GST_VIDEO_FRAME_COMP_WIDTH(&frame, comp[0]) * GST_VIDEO_FRAME_COMP_PSTRIDE(&frame, comp[0]);
-    const bool luma = p == 0;
-    for (int y = 0; y < rows; y++) {
-      guint8* row = static_cast<guint8*>(GST_VIDEO_FRAME_PLANE_DATA(&frame, p)) +
-                    static_cast<size_t>(y) * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, p);
-      switch (content) {
-      case Content::Black:
-        std::memset(row, luma || rgb ? 0 : 128, row_bytes);
-        break;
-      case Content::White:
-        std::memset(row, luma || rgb ? 255 : 128, row_bytes);
-        break;
-      case Content::Noise:
-        for (int x = 0; x < row_bytes; x++)
-          row[x] = static_cast<guint8>(rng.uniform(0, 256));
-        break;
-      case Content::Scene:
-        if (!luma) {
-          std::memset(row, 128, row_bytes);
-        } else if (!rgb) {
-          std::memcpy(row, grey.ptr(y), width);
-        } else {
-          const int pstride = GST_VIDEO_FRAME_COMP_PSTRIDE(&frame, 0);
-          for (int x = 0; x < width; x++)
-            std::memset(row + x * pstride, grey.at<guint8>(y, x), pstride);
-        }
-        break;
-      }
-    }
-  }
-  gst_video_frame_unmap(&frame);
-  GST_BUFFER_PTS(buffer) = 0;
-  GST_BUFFER_DURATION(buffer) = GST_SECOND / 30;
-  if (info_out)
-    *info_out = info;
+  fail_unless(buffer != nullptr, "%s %dx%d", format, width, height);
   return buffer;
 }
 
@@ -171,8 +112,7 @@ bool canaries_intact(GstBuffer* buffer, const GstVideoInfo& info) {
 }
 
 std::string caps_string(const char* format, int width, int height) {
-  return "video/x-raw,format=" + std::string(format) + ",width=" + std::to_string(width) +
-         ",height=" + std::to_string(height) + ",framerate=30/1";
+  return pickdetect::tools::caps_string(format, cv::Size(width, height));
 }
 
 /// A harness around a lone pickdetect with the box model and a bus of its own.

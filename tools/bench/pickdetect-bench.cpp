@@ -19,7 +19,10 @@
 // Frames are GRAY8: OpenCV's box.png pasted N times at seeded random poses (overlaps allowed) on
 // noise, built in-process with tests/common/scene.hpp. The first frame of every run warms up
 // and is not counted.
+#include "common/options.hpp"
+#include "common/plugin-path.hpp"
 #include "common/scene.hpp"
+#include "common/video-buffer.hpp"
 
 #include <pickdetect/detector.hpp>
 #include <pickdetect/features.hpp>
@@ -194,9 +197,8 @@ Result run_element(const Config& c, const std::string& model, const std::vector<
   gst_util_set_object_arg(G_OBJECT(detect), "features", c.features.c_str());
   g_object_set(detect, "model", model.c_str(), "detection-scale", c.detection_scale, "threads",
                c.threads, "min-matches", c.min_matches, nullptr);
-  GstCaps* caps = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, "GRAY8", "width",
-                                      G_TYPE_INT, c.res.width, "height", G_TYPE_INT, c.res.height,
-                                      "framerate", GST_TYPE_FRACTION, 30, 1, nullptr);
+  GstCaps* caps = gst_caps_from_string(
+      pickdetect::tools::caps_string("GRAY8", cv::Size(c.res.width, c.res.height)).c_str());
   g_object_set(src, "caps", caps, nullptr);
   gst_caps_unref(caps);
 
@@ -210,18 +212,8 @@ Result run_element(const Config& c, const std::string& model, const std::vector<
 
   if (gst_element_set_state(pipeline, GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE)
     die("the pipeline refused to start (model " + model + ")");
-  GstVideoInfo info;
-  gst_video_info_set_format(&info, GST_VIDEO_FORMAT_GRAY8, static_cast<guint>(c.res.width),
-                            static_cast<guint>(c.res.height));
-  const size_t stride = static_cast<size_t>(GST_VIDEO_INFO_PLANE_STRIDE(&info, 0));
   for (size_t i = 0; i < frames.size(); i++) {
-    GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
-    GstMapInfo map;
-    gst_buffer_map(buffer, &map, GST_MAP_WRITE);
-    for (int y = 0; y < frames[i].rows; y++)
-      std::memcpy(map.data + stride * static_cast<size_t>(y), frames[i].ptr(y),
-                  static_cast<size_t>(frames[i].cols));
-    gst_buffer_unmap(buffer, &map);
+    GstBuffer* buffer = pickdetect::tools::video_buffer(frames[i], "GRAY8");
     GST_BUFFER_PTS(buffer) = i * GST_SECOND / 30;
     GST_BUFFER_DURATION(buffer) = GST_SECOND / 30;
     if (gst_app_src_push_buffer(GST_APP_SRC(src), buffer) != GST_FLOW_OK)
@@ -327,20 +319,6 @@ std::string load_average() {
   std::string a, b, c;
   f >> a >> b >> c;
   return a + " " + b + " " + c;
-}
-
-/// Lets a binary in the build tree use the plugin built beside it.
-void use_build_tree_plugin() {
-#ifdef PICKDETECT_PLUGIN_BUILD_DIR
-  if (!g_file_test(PICKDETECT_PLUGIN_BUILD_DIR, G_FILE_TEST_IS_DIR))
-    return;
-  const gchar* old = g_getenv("GST_PLUGIN_PATH");
-  gchar* path =
-      old && *old ? g_strconcat(PICKDETECT_PLUGIN_BUILD_DIR, G_SEARCHPATH_SEPARATOR_S, old, nullptr)
-                  : g_strdup(PICKDETECT_PLUGIN_BUILD_DIR);
-  g_setenv("GST_PLUGIN_PATH", path, TRUE);
-  g_free(path);
-#endif
 }
 
 // ---- the JSON element ----------------------------------------------------------------------
@@ -493,7 +471,9 @@ std::string json_stats(const Stats& s) {
 }
 
 int run(int argc, char** argv) {
-  use_build_tree_plugin();
+#ifdef PICKDETECT_PLUGIN_BUILD_DIR
+  pickdetect::tools::use_build_tree_plugin(PICKDETECT_PLUGIN_BUILD_DIR);
+#endif
   Options o;
   const GOptionEntry entries[] = {
       {"quick", 'q', 0, G_OPTION_ARG_NONE, &o.quick,
@@ -508,16 +488,12 @@ int run(int argc, char** argv) {
       {"data", 0, 0, G_OPTION_ARG_FILENAME, &o.data,
        "Folder holding box.png (default: OpenCV's samples, " PICKDETECT_BENCH_DATA_DIR ")", "DIR"},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
-  GOptionContext* context = g_option_context_new(nullptr);
-  g_option_context_set_summary(context, "Times the pickdetect element per frame and per stage.");
-  g_option_context_add_main_entries(context, entries, nullptr);
-  g_option_context_add_group(context, gst_init_get_option_group());
-  GError* error = nullptr;
-  const gboolean parsed = g_option_context_parse(context, &argc, &argv, &error);
-  g_option_context_free(context);
-  if (!parsed) {
-    std::cerr << "pickdetect-bench: " << error->message << "\n";
-    g_clear_error(&error);
+  pickdetect::tools::OptionHelp help;
+  help.summary = "Times the pickdetect element per frame and per stage.";
+  std::string error;
+  if (!pickdetect::tools::parse_options(argc, argv, entries, help, error,
+                                        gst_init_get_option_group())) {
+    std::cerr << "pickdetect-bench: " << error << "\n";
     return 2;
   }
   if (o.json_element)

@@ -14,6 +14,8 @@
 //
 // Prints the reprojection error in pixels and in millimetres. Exit status 1 on a refusal (the
 // pattern not found, naming the photo; too few views; a degenerate point set), 2 on bad usage.
+#include "common/options.hpp"
+
 #include <pickdetect/calibration.hpp>
 #include <pickdetect/error.hpp>
 
@@ -91,18 +93,14 @@ int main(int argc, char** argv) {
       {"output", 'o', 0, G_OPTION_ARG_FILENAME, &output, "Calibration file to write (YAML)",
        "FILE"},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
-  std::unique_ptr<GOptionContext, decltype(&g_option_context_free)> ctx(
-      g_option_context_new("[PICTURES...] - calibrate the camera and the work plane"),
-      g_option_context_free);
-  g_option_context_add_main_entries(ctx.get(), entries, nullptr);
-  g_option_context_set_description(
-      ctx.get(), "Plane coordinates: mm; from a chessboard, origin at the pattern's first inner "
-                 "corner, x along its rows, y from its first row to the next; heights towards "
-                 "the camera. See docs/robot-output.md.");
-  GError* err = nullptr;
-  if (!g_option_context_parse(ctx.get(), &argc, &argv, &err)) {
-    std::fprintf(stderr, "pickdetect-calibrate: %s\n", err->message);
-    g_error_free(err);
+  pickdetect::tools::OptionHelp help;
+  help.parameter = "[PICTURES...] - calibrate the camera and the work plane";
+  help.description = "Plane coordinates: mm; from a chessboard, origin at the pattern's first "
+                     "inner corner, x along its rows, y from its first row to the next; heights "
+                     "towards the camera. See docs/robot-output.md.";
+  std::string bad_options;
+  if (!pickdetect::tools::parse_options(argc, argv, entries, help, bad_options)) {
+    std::fprintf(stderr, "pickdetect-calibrate: %s\n", bad_options.c_str());
     return 2;
   }
   auto cleanup = [&] {

@@ -3,6 +3,8 @@
 //
 //   pickdetect-detect --model box.png box_in_scene.png
 //   pickdetect-detect --model cookies.yml --method ransac-clustered --annotate out.png scene.jpg
+#include "common/options.hpp"
+
 #include <pickdetect/pickdetect.hpp>
 
 #include <glib.h>
@@ -10,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include <cstdio>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
@@ -74,7 +77,9 @@ int main(int argc, char** argv) {
   gboolean no_scale = FALSE, no_refine = FALSE, json = FALSE, exact = FALSE;
   const GOptionEntry entries[] = {
       {"model", 'm', 0, G_OPTION_ARG_FILENAME_ARRAY, &models,
-       "Model file (.yml) or model picture; repeat for several models", "FILE"},
+       "Model file (.yml), model picture or model-set file, or several separated by commas (as "
+       "the element's model property); repeat for more models",
+       "FILE"},
       {"method", 0, 0, G_OPTION_ARG_STRING, &method,
        "voting (default), ransac-clustered or ransac-all", "NAME"},
       {"features", 0, 0, G_OPTION_ARG_STRING, &features,
@@ -105,14 +110,11 @@ int main(int argc, char** argv) {
        "Write the (first) model as a model file with its features cached", "FILE"},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
 
-  std::unique_ptr<GOptionContext, decltype(&g_option_context_free)> ctx(
-      g_option_context_new("PICTURE... - find every instance of a model in pictures"),
-      g_option_context_free);
-  g_option_context_add_main_entries(ctx.get(), entries, nullptr);
-  GError* err = nullptr;
-  if (!g_option_context_parse(ctx.get(), &argc, &argv, &err)) {
-    std::fprintf(stderr, "pickdetect-detect: %s\n", err->message);
-    g_error_free(err);
+  pickdetect::tools::OptionHelp help;
+  help.parameter = "PICTURE... - find every instance of a model in pictures";
+  std::string bad_options;
+  if (!pickdetect::tools::parse_options(argc, argv, entries, help, bad_options)) {
+    std::fprintf(stderr, "pickdetect-detect: %s\n", bad_options.c_str());
     return 2;
   }
   auto cleanup = [&] {
@@ -145,8 +147,10 @@ int main(int argc, char** argv) {
     s.search = exact ? pickdetect::Search::BruteForce : pickdetect::Search::KdTree;
 
     std::vector<pickdetect::Model> loaded;
-    for (gchar** m = models; *m; ++m)
-      loaded.push_back(pickdetect::load_model(*m));
+    for (gchar** m = models; *m; ++m) {
+      std::vector<pickdetect::Model> listed = pickdetect::load_models(*m);
+      std::move(listed.begin(), listed.end(), std::back_inserter(loaded));
+    }
     if (save)
       pickdetect::save_model(loaded.front(), save, true);
     const pickdetect::Detector detector(std::move(loaded));

@@ -16,6 +16,9 @@
 #include "metrics.hpp"
 #include "runner.hpp"
 
+#include "common/options.hpp"
+#include "common/plugin-path.hpp"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -36,30 +39,6 @@ using namespace pickdetect::eval;
 namespace {
 
 const char* const kMethods[] = {"voting", "ransac-clustered", "ransac-all"};
-
-/// Lets a binary in the build tree use the plugin built beside it.
-void use_build_tree_plugin() {
-#if defined(PICKDETECT_EVAL_BUILD_DIR) && defined(PICKDETECT_PLUGIN_BUILD_DIR)
-  gchar* exe = g_file_read_link("/proc/self/exe", nullptr);
-  if (!exe)
-    return;
-  gchar* dir = g_path_get_dirname(exe);
-  gchar* here = g_canonicalize_filename(dir, nullptr);
-  gchar* build = g_canonicalize_filename(PICKDETECT_EVAL_BUILD_DIR, nullptr);
-  if (g_strcmp0(here, build) == 0 && g_file_test(PICKDETECT_PLUGIN_BUILD_DIR, G_FILE_TEST_IS_DIR)) {
-    const gchar* old = g_getenv("GST_PLUGIN_PATH");
-    gchar* path = old && *old ? g_strconcat(PICKDETECT_PLUGIN_BUILD_DIR, G_SEARCHPATH_SEPARATOR_S,
-                                            old, nullptr)
-                              : g_strdup(PICKDETECT_PLUGIN_BUILD_DIR);
-    g_setenv("GST_PLUGIN_PATH", path, TRUE);
-    g_free(path);
-  }
-  g_free(build);
-  g_free(here);
-  g_free(dir);
-  g_free(exe);
-#endif
-}
 
 class Progress {
 public:
@@ -216,21 +195,16 @@ int run(int argc, char** argv) {
       {G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &o.rest, nullptr, "DATASET_DIR"},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
 
-  GOptionContext* context = g_option_context_new(nullptr);
-  g_option_context_set_summary(
-      context,
+  pickdetect::tools::OptionHelp help;
+  help.summary =
       "Runs every scene of an annotated dataset (see the benchmark's FORMAT.md) through the "
       "pickdetect element\nonce per method, with all the dataset's models loaded at once (every "
       "detection counts: one\nof a model that is not in the scene is a false detection), and "
-      "prints object, pixel, centre\nand pick figures per model and overall.");
-  g_option_context_add_main_entries(context, entries, nullptr);
-  g_option_context_add_group(context, gst_init_get_option_group());
-  GError* error = nullptr;
-  const gboolean parsed = g_option_context_parse(context, &argc, &argv, &error);
-  g_option_context_free(context);
-  if (!parsed) {
-    std::cerr << "pickdetect-eval: " << error->message << "\n";
-    g_clear_error(&error);
+      "prints object, pixel, centre\nand pick figures per model and overall.";
+  std::string bad_options;
+  if (!pickdetect::tools::parse_options(argc, argv, entries, help, bad_options,
+                                        gst_init_get_option_group())) {
+    std::cerr << "pickdetect-eval: " << bad_options << "\n";
     return 2;
   }
   if (!o.rest || !o.rest[0] || o.rest[1]) {
@@ -338,6 +312,7 @@ int run(int argc, char** argv) {
       scale_frames(dataset, &frames, o.frame_scale);
     if (o.frame_gain != 1.0 || o.frame_contrast != 1.0)
       relight_frames(frames, o.frame_gain, o.frame_contrast);
+    GError* error = nullptr;
     gchar* tmp = g_dir_make_tmp("pickdetect-eval-XXXXXX", &error);
     if (!tmp) {
       std::cerr << "pickdetect-eval: " << error->message << "\n";
@@ -454,7 +429,9 @@ int run(int argc, char** argv) {
 } // namespace
 
 int main(int argc, char** argv) {
-  use_build_tree_plugin();
+#if defined(PICKDETECT_EVAL_BUILD_DIR) && defined(PICKDETECT_PLUGIN_BUILD_DIR)
+  pickdetect::tools::use_build_tree_plugin(PICKDETECT_PLUGIN_BUILD_DIR, PICKDETECT_EVAL_BUILD_DIR);
+#endif
   try {
     return run(argc, argv);
   } catch (const FormatError& e) {

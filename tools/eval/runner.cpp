@@ -1,6 +1,11 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #include "runner.hpp"
 
+#include "common/video-buffer.hpp"
+
+#include <pickdetect/error.hpp>
+#include <pickdetect/model.hpp>
+
 #include <gst/app/gstappsink.h>
 #include <gst/app/gstappsrc.h>
 #include <gst/gst.h>
@@ -8,7 +13,6 @@
 #ifdef HAVE_PICKDETECT_META
 #include <gst/pickdetect/pickdetect-meta.h>
 #endif
-#include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -152,23 +156,17 @@ std::string write_model_file(const Dataset& dataset, const ModelInfo& model,
   gchar* file = g_build_filename(folder.c_str(), (model.name + ".yml").c_str(), nullptr);
   const std::string path(file);
   g_free(file);
-  // The model file format of the core's load_model (written as its save_model does).
+  pickdetect::Model written;
+  written.name = model.name;
+  written.image_path = image;
+  for (const Point& p : model.principal_points)
+    written.principal_points.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
+  for (const Point& p : model.polygon)
+    written.outline.emplace_back(static_cast<float>(p.x), static_cast<float>(p.y));
   try {
-    cv::FileStorage store(path, cv::FileStorage::WRITE);
-    if (!store.isOpened())
-      throw RunError("model file '" + path + "' cannot be written");
-    store << "name" << model.name;
-    store << "image" << image;
-    auto points = [&store](const char* key, const std::vector<Point>& pts) {
-      store << key << "[";
-      for (const Point& p : pts)
-        store << "[:" << p.x << p.y << "]";
-      store << "]";
-    };
-    points("principal_points", model.principal_points);
-    points("outline", model.polygon);
-  } catch (const cv::Exception& e) {
-    throw RunError("model file '" + path + "' cannot be written: " + e.err);
+    pickdetect::save_model(written, path, false);
+  } catch (const pickdetect::Error& e) {
+    throw RunError(e.what());
   }
   return path;
 }
@@ -286,6 +284,7 @@ void ElementRunner::set_fps(double fps) {
 
 FrameResult ElementRunner::process(const Frame& frame) {
   const char* format = frame.bgr ? "BGR" : "GRAY8";
+  const cv::Size size(frame.width, frame.height);
   if (!impl_->caps || [&] {
         const GstStructure* s = gst_caps_get_structure(impl_->caps, 0);
         int w = 0, h = 0;
@@ -302,18 +301,9 @@ FrameResult ElementRunner::process(const Frame& frame) {
         impl_->fps > 0 ? static_cast<int>(std::lround(impl_->fps * 1000)) : 0,
         impl_->fps > 0 ? 1000 : 1, nullptr);
   }
-  // GStreamer's default row stride is rounded up to 4 bytes.
-  GstVideoInfo info;
-  gst_video_info_from_caps(&info, impl_->caps);
-  const size_t row = frame.pixels.size() / static_cast<size_t>(frame.height);
-  const size_t stride = static_cast<size_t>(GST_VIDEO_INFO_PLANE_STRIDE(&info, 0));
-  GstBuffer* buffer = gst_buffer_new_allocate(nullptr, GST_VIDEO_INFO_SIZE(&info), nullptr);
-  GstMapInfo map;
-  gst_buffer_map(buffer, &map, GST_MAP_WRITE);
-  for (int y = 0; y < frame.height; ++y)
-    std::memcpy(map.data + stride * static_cast<size_t>(y),
-                frame.pixels.data() + row * static_cast<size_t>(y), row);
-  gst_buffer_unmap(buffer, &map);
+  const cv::Mat picture(size, frame.bgr ? CV_8UC3 : CV_8UC1,
+                        const_cast<unsigned char*>(frame.pixels.data()));
+  GstBuffer* buffer = pickdetect::tools::video_buffer(picture, format);
   const GstClockTime frame_time =
       impl_->fps > 0 ? static_cast<GstClockTime>(GST_SECOND / impl_->fps) : GST_SECOND;
   GST_BUFFER_PTS(buffer) = impl_->frames * frame_time;

@@ -4,6 +4,8 @@
 // and compares the process's resident memory after the first frames with that at the end, both
 // taken after malloc_trim (see trimmed_rss_kb).
 // Frames: the model picture pasted at a few poses on fresh noise (a new buffer each frame).
+#include "common/video-buffer.hpp"
+
 #include <pickdetect/model.hpp>
 
 #include <opencv2/imgproc.hpp>
@@ -177,9 +179,8 @@ int main(int argc, char** argv) {
   GstElement* pd = gst_bin_get_by_name(GST_BIN(pipeline), "pd");
   GstElement* sink = gst_bin_get_by_name(GST_BIN(pipeline), "sink");
   g_object_set(pd, "model", o.model.c_str(), nullptr);
-  GstCaps* caps = gst_caps_new_simple("video/x-raw", "format", G_TYPE_STRING, "BGR", "width",
-                                      G_TYPE_INT, o.width, "height", G_TYPE_INT, o.height,
-                                      "framerate", GST_TYPE_FRACTION, 30, 1, nullptr);
+  GstCaps* caps = gst_caps_from_string(
+      pickdetect::tools::caps_string("BGR", cv::Size(o.width, o.height)).c_str());
   gst_app_src_set_caps(GST_APP_SRC(src), caps);
   gst_caps_unref(caps);
   State st;
@@ -199,9 +200,7 @@ int main(int argc, char** argv) {
   bool pushed_all = true;
   for (int i = 0; i < o.frames; i++) {
     const cv::Mat& scene = scenes[i % scenes.size()];
-    const gsize size = scene.total() * scene.elemSize();
-    GstBuffer* buffer = gst_buffer_new_allocate(nullptr, size, nullptr);
-    gst_buffer_fill(buffer, 0, scene.data, size);
+    GstBuffer* buffer = pickdetect::tools::video_buffer(scene, "BGR");
     GST_BUFFER_PTS(buffer) = gst_util_uint64_scale(i, GST_SECOND, 30);
     GST_BUFFER_DURATION(buffer) = GST_SECOND / 30;
     if (gst_app_src_push_buffer(GST_APP_SRC(src), buffer) != GST_FLOW_OK) {

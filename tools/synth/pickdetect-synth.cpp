@@ -26,6 +26,8 @@
 // camera.cpp, glare.cpp, sequence.cpp (--sequence: video sequences with a track per object).
 #include "synth.hpp"
 
+#include "common/options.hpp"
+
 #include <glib.h>
 #include <glib/gstdio.h>
 #include <json-glib/json-glib.h>
@@ -217,14 +219,11 @@ int run(int argc, char** argv) {
        "Bin sequence: the top free object is taken away every N frames (15; 0: never)", "N"},
       {G_OPTION_REMAINING, 0, 0, G_OPTION_ARG_FILENAME_ARRAY, &pictures, nullptr, "PICTURE..."},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
-  GOptionContext* context = g_option_context_new(nullptr);
-  g_option_context_set_summary(context,
-                               "Makes annotated bin and conveyor scenes (or a conveyor clip) from "
-                               "model pictures; a PNG's alpha marks the object.");
-  g_option_context_add_main_entries(context, entries, nullptr);
-  GError* error = nullptr;
-  const bool parsed = g_option_context_parse(context, &argc, &argv, &error);
-  g_option_context_free(context);
+  pickdetect::tools::OptionHelp help;
+  help.summary = "Makes annotated bin and conveyor scenes (or a conveyor clip) from model "
+                 "pictures; a PNG's alpha marks the object.";
+  std::string bad_options;
+  const bool parsed = pickdetect::tools::parse_options(argc, argv, entries, help, bad_options);
   struct Free {
     std::vector<gchar*> strings;
     gchar** array;
@@ -234,11 +233,8 @@ int run(int argc, char** argv) {
       g_strfreev(array);
     }
   } cleanup{{size, instances, scale, kind, out_dir, video, format, name, sequence}, pictures};
-  if (!parsed) {
-    const std::string message = error->message;
-    g_clear_error(&error);
-    throw Failure(message);
-  }
+  if (!parsed)
+    throw Failure(bad_options);
   if (!pictures || !pictures[0])
     throw Failure("give one or more model pictures (see --help)");
   if (!out_dir && !video)
@@ -559,6 +555,7 @@ int run(int argc, char** argv) {
   json_generator_set_pretty(gen, TRUE);
   json_generator_set_indent(gen, 1);
   const std::string json_path = join(dir, "dataset.json");
+  GError* error = nullptr;
   const gboolean ok = json_generator_to_file(gen, json_path.c_str(), &error);
   json_node_unref(root);
   g_object_unref(gen);

@@ -32,6 +32,10 @@ G_BEGIN_DECLS
  * GstPickDetectPoint:
  * @x: column in pixels
  * @y: row in pixels (y axis down)
+ *
+ * A point of a frame.
+ *
+ * Since: 0.1
  */
 typedef struct {
   gdouble x;
@@ -85,6 +89,8 @@ typedef struct {
  * work plane, in millimetres, lens distortion and the model's height accounted for) come after
  * the pixel ones, so that code built against the earlier struct reads the same fields. Plane
  * positions do not change when the frame is scaled.
+ *
+ * Since: 0.1
  */
 typedef struct {
   gchar* model_name;
@@ -135,6 +141,8 @@ typedef struct _GstPickDetectMeta GstPickDetectMeta;
  * @motion_y: their common motion in pixels per second, y
  *
  * Read it with gst_pickdetect_meta_get_n_instances() and gst_pickdetect_meta_get_instance().
+ *
+ * Since: 0.1
  */
 struct _GstPickDetectMeta {
   GstMeta meta;
@@ -145,35 +153,43 @@ struct _GstPickDetectMeta {
   gdouble motion_y;
 };
 
+/**
+ * GST_PICKDETECT_META_API_TYPE:
+ *
+ * The #GType of the GstPickDetectMeta API, for gst_buffer_get_meta() and meta transforms.
+ *
+ * Since: 0.1
+ */
 #define GST_PICKDETECT_META_API_TYPE (gst_pickdetect_meta_api_get_type())
+
+/**
+ * GST_PICKDETECT_META_INFO:
+ *
+ * The #GstMetaInfo of GstPickDetectMeta, for gst_buffer_add_meta().
+ *
+ * Since: 0.1
+ */
 #define GST_PICKDETECT_META_INFO (gst_pickdetect_meta_get_info())
 
-/* The registered API type ("GstPickDetectMetaAPI"), tagged video, size and orientation. */
 GST_PICKDETECT_META_API
 GType gst_pickdetect_meta_api_get_type(void);
 
-/* The implementation ("GstPickDetectMeta"): init, free and transform functions. */
 GST_PICKDETECT_META_API
 const GstMetaInfo* gst_pickdetect_meta_get_info(void);
 
-/* Adds an empty meta (no instance) to a writable buffer. */
 GST_PICKDETECT_META_API
 GstPickDetectMeta* gst_buffer_add_pickdetect_meta(GstBuffer* buffer);
 
-/* The buffer's first GstPickDetectMeta, or NULL. */
 GST_PICKDETECT_META_API
 GstPickDetectMeta* gst_buffer_get_pickdetect_meta(GstBuffer* buffer);
 
 GST_PICKDETECT_META_API
 guint gst_pickdetect_meta_get_n_instances(const GstPickDetectMeta* meta);
 
-/* The instance at index (< n_instances), owned by the meta, or NULL when out of range. */
 GST_PICKDETECT_META_API
 const GstPickDetectInstance* gst_pickdetect_meta_get_instance(const GstPickDetectMeta* meta,
                                                               guint index);
 
-/* Appends a deep copy of instance (its strings and arrays are copied; the caller keeps its own)
- * and returns the meta's copy. */
 GST_PICKDETECT_META_API
 const GstPickDetectInstance*
 gst_pickdetect_meta_add_instance(GstPickDetectMeta* meta, const GstPickDetectInstance* instance);

@@ -1,6 +1,19 @@
-/* SPDX-License-Identifier: LGPL-2.1-or-later
+/* SPDX-License-Identifier: LGPL-2.1-or-later */
+/**
+ * SECTION:gstpickdetectmeta
+ * @title: GstPickDetectMeta
+ * @short_description: the object instances the pickdetect element found in a frame
+ * @see_also: #GstVideoRegionOfInterestMeta
  *
- * GstPickDetectMeta, see include/gst/pickdetect/pickdetect-meta.h.
+ * Every buffer that went through pickdetect carries exactly one #GstPickDetectMeta, also when
+ * nothing was found. Its instances (#GstPickDetectInstance) give each object's model, pose,
+ * principal points, outline, score, visibility, whether it is covered, whether it can be picked
+ * and in which order, and with a calibration its place on the work plane in millimetres.
+ * Positions are in pixels of the frame the meta is attached to; they follow the frame through
+ * videoscale. Build against it with `pkg-config --cflags --libs gstreamer-pickdetect-meta-1.0`
+ * and include <gst/pickdetect/pickdetect-meta.h>.
+ *
+ * Since: 0.1
  */
 #include <gst/pickdetect/pickdetect-meta.h>
 
@@ -128,6 +141,15 @@ static gboolean gst_pickdetect_meta_transform(GstBuffer* dest, GstMeta* meta, Gs
   return TRUE;
 }
 
+/**
+ * gst_pickdetect_meta_api_get_type:
+ *
+ * The registered API type, "GstPickDetectMetaAPI", tagged video, size and orientation.
+ *
+ * Returns: the #GType of the meta's API
+ *
+ * Since: 0.1
+ */
 GType gst_pickdetect_meta_api_get_type(void) {
   static GType type = 0;
   static const gchar* tags[] = {GST_META_TAG_VIDEO_STR, GST_META_TAG_VIDEO_SIZE_STR,
@@ -139,6 +161,16 @@ GType gst_pickdetect_meta_api_get_type(void) {
   return type;
 }
 
+/**
+ * gst_pickdetect_meta_get_info:
+ *
+ * The implementation, "GstPickDetectMeta": its init, free and transform functions (copies are
+ * deep; a scale transform rescales every pixel position).
+ *
+ * Returns: (transfer none): the meta's #GstMetaInfo
+ *
+ * Since: 0.1
+ */
 const GstMetaInfo* gst_pickdetect_meta_get_info(void) {
   static const GstMetaInfo* info = NULL;
   if (g_once_init_enter((GstMetaInfo**)&info)) {
@@ -150,22 +182,58 @@ const GstMetaInfo* gst_pickdetect_meta_get_info(void) {
   return info;
 }
 
+/**
+ * gst_buffer_add_pickdetect_meta:
+ * @buffer: a writable #GstBuffer
+ *
+ * Adds an empty meta (no instance) to @buffer.
+ *
+ * Returns: (transfer none): the meta, owned by @buffer
+ *
+ * Since: 0.1
+ */
 GstPickDetectMeta* gst_buffer_add_pickdetect_meta(GstBuffer* buffer) {
   g_return_val_if_fail(GST_IS_BUFFER(buffer), NULL);
   g_return_val_if_fail(gst_buffer_is_writable(buffer), NULL);
   return (GstPickDetectMeta*)gst_buffer_add_meta(buffer, GST_PICKDETECT_META_INFO, NULL);
 }
 
+/**
+ * gst_buffer_get_pickdetect_meta:
+ * @buffer: a #GstBuffer
+ *
+ * Returns: (transfer none) (nullable): the first #GstPickDetectMeta of @buffer, or %NULL
+ *
+ * Since: 0.1
+ */
 GstPickDetectMeta* gst_buffer_get_pickdetect_meta(GstBuffer* buffer) {
   g_return_val_if_fail(GST_IS_BUFFER(buffer), NULL);
   return (GstPickDetectMeta*)gst_buffer_get_meta(buffer, GST_PICKDETECT_META_API_TYPE);
 }
 
+/**
+ * gst_pickdetect_meta_get_n_instances:
+ * @meta: a #GstPickDetectMeta
+ *
+ * Returns: the number of instances in @meta
+ *
+ * Since: 0.1
+ */
 guint gst_pickdetect_meta_get_n_instances(const GstPickDetectMeta* meta) {
   g_return_val_if_fail(meta != NULL, 0);
   return meta->n_instances;
 }
 
+/**
+ * gst_pickdetect_meta_get_instance:
+ * @meta: a #GstPickDetectMeta
+ * @index: which instance, below gst_pickdetect_meta_get_n_instances()
+ *
+ * Returns: (transfer none) (nullable): the instance at @index, owned by @meta, or %NULL when
+ *   @index is out of range
+ *
+ * Since: 0.1
+ */
 const GstPickDetectInstance* gst_pickdetect_meta_get_instance(const GstPickDetectMeta* meta,
                                                               guint index) {
   g_return_val_if_fail(meta != NULL, NULL);
@@ -174,6 +242,18 @@ const GstPickDetectInstance* gst_pickdetect_meta_get_instance(const GstPickDetec
   return &meta->instances[index];
 }
 
+/**
+ * gst_pickdetect_meta_add_instance:
+ * @meta: a #GstPickDetectMeta of a writable buffer
+ * @instance: the instance to append
+ *
+ * Appends a deep copy of @instance (its strings and arrays are copied; the caller keeps its
+ * own).
+ *
+ * Returns: (transfer none): the meta's copy
+ *
+ * Since: 0.1
+ */
 const GstPickDetectInstance*
 gst_pickdetect_meta_add_instance(GstPickDetectMeta* meta, const GstPickDetectInstance* instance) {
   g_return_val_if_fail(meta != NULL, NULL);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
-// Test scenes built from a real textured picture at known poses, so expectations are exact.
+// Scenes for the tests and the benchmark, built from a real textured picture at known poses, so
+// expectations are exact.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -37,6 +38,17 @@ inline cv::Mat plain_background(const cv::Size& size, int level = 110, int seed 
   cv::RNG rng(static_cast<uint64>(seed));
   rng.fill(noise, cv::RNG::NORMAL, level, 4);
   return noise;
+}
+
+/// A background of smooth noise: uniform in [level, level + span), blurred by a Gaussian of
+/// `sigma` pixels, seeded.
+inline cv::Mat smooth_noise_background(const cv::Size& size, int seed = 1234, int level = 100,
+                                       int span = 40, double sigma = 2.0) {
+  cv::Mat noise(size, CV_8UC1);
+  cv::RNG rng(static_cast<uint64>(seed));
+  rng.fill(noise, cv::RNG::UNIFORM, 0, span);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), sigma);
+  return noise + cv::Scalar(level);
 }
 
 /// Pastes the model picture (grey, CV_8UC1) onto `scene` at each pose, later poses on top.

@@ -1,0 +1,78 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Matching: the 2NN ratio test over all models at once, look-alike features rejected or shared,
+// kd-tree against brute force.
+#include "common/scene.hpp"
+
+#include <pickdetect/matching.hpp>
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <vector>
+
+using namespace pickdetect;
+
+TEST(Matcher, AFeatureThatFitsTwoModelsEquallyDecidesForNeither) {
+  const Model a = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  Model twin = a;
+  twin.name = "twin";
+  const Features scene = [&] {
+    Features f;
+    f.keypoints = a.sift.keypoints;
+    f.descriptors = a.sift.descriptors.clone();
+    return f;
+  }();
+  EXPECT_GT(Matcher({a}).match(scene.descriptors, 0.8).size(), a.sift.keypoints.size() / 2);
+  EXPECT_TRUE(Matcher({a, twin}).match(scene.descriptors, 0.8).empty());
+}
+
+TEST(Matcher, SharingGivesAFeatureToEveryLookAlike) {
+  const Model a = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  Model twin = a;
+  twin.name = "twin";
+  const Model other = load_model(std::string(PICKDETECT_TEST_DATA) + "/graf1.png");
+  const cv::Mat scene = a.sift.descriptors;
+  const std::vector<Match> matches =
+      Matcher({a, twin, other}).match(scene, 0.8, Search::BruteForce, Ambiguity::Share);
+  size_t per_model[3] = {0, 0, 0};
+  for (const Match& m : matches) {
+    ++per_model[m.model];
+    EXPECT_TRUE(m.shared || m.model == 2);
+  }
+  EXPECT_GT(per_model[0], a.sift.keypoints.size() / 2);
+  EXPECT_EQ(per_model[0], per_model[1]);
+  EXPECT_LT(per_model[2], per_model[0] / 20);
+  // With one model, sharing changes nothing.
+  const Matcher alone({a});
+  const std::vector<Match> reject = alone.match(scene, 0.8, Search::BruteForce);
+  const std::vector<Match> share = alone.match(scene, 0.8, Search::BruteForce, Ambiguity::Share);
+  ASSERT_EQ(reject.size(), share.size());
+  for (size_t i = 0; i < reject.size(); ++i) {
+    EXPECT_EQ(reject[i].model_point, share[i].model_point);
+    EXPECT_FALSE(share[i].shared);
+  }
+}
+
+TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
+  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  const cv::Mat box =
+      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/box.png", cv::IMREAD_GRAYSCALE);
+  cv::Mat scene = test_scene::plain_background({800, 600});
+  test_scene::paste(scene, box, {{{250.f, 250.f}, 30.0, 1.0}, {{560.f, 360.f}, 200.0, 0.9}});
+  const Features f = extract_features(scene);
+  const Matcher matcher({model});
+  const std::vector<Match> exact = matcher.match(f.descriptors, 0.8, Search::BruteForce);
+  const std::vector<Match> fast = matcher.match(f.descriptors, 0.8, Search::KdTree);
+  ASSERT_GT(exact.size(), 100u);
+  size_t shared = 0;
+  for (const Match& e : exact)
+    shared += std::any_of(fast.begin(), fast.end(), [&](const Match& k) {
+      return k.scene_point == e.scene_point && k.model_point == e.model_point;
+    });
+  EXPECT_GE(shared, exact.size() * 9 / 10)
+      << shared << " of " << exact.size() << " exact matches kept";
+  EXPECT_EQ(fast.size(), matcher.match(f.descriptors, 0.8, Search::KdTree).size());
+}
