@@ -3,6 +3,7 @@
 // normal is placed by all of its evidence.
 #include "../../src/scene_explanation.hpp"
 #include "../support/box.hpp"
+#include "../support/tilted_face.hpp"
 #include "common/scene.hpp"
 
 #include <pickdetect/matching.hpp>
@@ -106,26 +107,9 @@ TEST(SceneExplanation, ShiftedAndTurnedCopiesLoseToTheTrueInstances) {
 TEST(SceneExplanation, AFaceTiltedFarFromTheCameraIsPlacedByAllItsEvidence) {
   // The box's face turned 55 degrees about its horizontal axis, seen from 600 px away:
   // foreshortened to about 0.6 of its height, the far edge smaller.
-  const cv::Mat& box = box_model().image;
-  const double tilt = 55.0 * CV_PI / 180.0, f = 600.0, scale = 0.9;
-  const cv::Size frame(640, 480);
-  std::vector<cv::Point2f> corners = {{0.f, 0.f},
-                                      {static_cast<float>(box.cols), 0.f},
-                                      {static_cast<float>(box.cols), static_cast<float>(box.rows)},
-                                      {0.f, static_cast<float>(box.rows)}};
-  std::vector<cv::Point2f> seen;
-  for (const cv::Point2f& p : corners) {
-    const double x = (p.x - box.cols / 2.0) * scale, y = (p.y - box.rows / 2.0) * scale;
-    const double yc = y * std::cos(tilt), zc = f + y * std::sin(tilt);
-    seen.emplace_back(static_cast<float>(frame.width / 2.0 + f * x / zc),
-                      static_cast<float>(frame.height / 2.0 + f * yc / zc));
-  }
-  const cv::Matx33d h(cv::getPerspectiveTransform(corners, seen));
-  cv::Mat scene = test_scene::plain_background(frame, 100), warped, mask;
-  cv::warpPerspective(box, warped, cv::Mat(h), frame, cv::INTER_AREA);
-  cv::warpPerspective(cv::Mat(box.size(), CV_8UC1, cv::Scalar(255)), mask, cv::Mat(h), frame,
-                      cv::INTER_NEAREST);
-  warped.copyTo(scene, mask);
+  cv::Matx33d h;
+  const cv::Mat scene =
+      test_scene::tilted_face(box_model().image, 55.0, 0.9, 600.0, cv::Size(640, 480), h);
   const Detection d = box_detector().detect(scene);
   ASSERT_EQ(d.instances.size(), 1u) << "one tilted box, one instance";
   const Instance& inst = d.instances[0];

@@ -2,6 +2,7 @@
 // Faces seen far off their normal: the model's simulated tilted views find them, and their
 // features land where the picture shows them.
 #include "../support/box.hpp"
+#include "../support/tilted_face.hpp"
 #include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
@@ -18,36 +19,10 @@ using pickdetect::test_scene::box_model;
 
 namespace {
 
-/// box.png turned `tilt_deg` about its horizontal axis, seen from 700 px away, centred in a
-/// 640x480 frame; `h` carries model pixels into the frame.
-cv::Mat tilted_box(double tilt_deg, cv::Matx33d& h) {
-  const cv::Mat& box = box_model().image;
-  const double tilt = tilt_deg * CV_PI / 180.0, f = 700.0, scale = 1.2;
-  const cv::Size frame(640, 480);
-  const std::vector<cv::Point2f> corners = {
-      {0.f, 0.f},
-      {static_cast<float>(box.cols), 0.f},
-      {static_cast<float>(box.cols), static_cast<float>(box.rows)},
-      {0.f, static_cast<float>(box.rows)}};
-  std::vector<cv::Point2f> seen;
-  for (const cv::Point2f& p : corners) {
-    const double x = (p.x - box.cols / 2.0) * scale, y = (p.y - box.rows / 2.0) * scale;
-    const double zc = f + y * std::sin(tilt);
-    seen.emplace_back(static_cast<float>(frame.width / 2.0 + f * x / zc),
-                      static_cast<float>(frame.height / 2.0 + f * y * std::cos(tilt) / zc));
-  }
-  h = cv::Matx33d(cv::getPerspectiveTransform(corners, seen));
-  cv::Mat scene = test_scene::plain_background(frame, 100), warped, mask;
-  cv::warpPerspective(box, warped, cv::Mat(h), frame, cv::INTER_AREA);
-  cv::warpPerspective(cv::Mat(box.size(), CV_8UC1, cv::Scalar(255)), mask, cv::Mat(h), frame,
-                      cv::INTER_NEAREST);
-  warped.copyTo(scene, mask);
-  return scene;
-}
-
 TEST(TiltedViews, AFaceSeen68DegreesOffItsNormalIsFound) {
   cv::Matx33d h;
-  const cv::Mat scene = tilted_box(68.0, h);
+  const cv::Mat scene =
+      test_scene::tilted_face(box_model().image, 68.0, 1.2, 700.0, cv::Size(640, 480), h);
   Model plain = box_model();
   plain.max_tilt_deg = 0.0;
   compute_model_features(plain);
