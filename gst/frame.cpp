@@ -82,6 +82,9 @@ GstStructure* instance_structure(const pickdetect::Instance& instance,
   }
   if (track)
     add_track_fields(s, *track);
+  if (track && plane)
+    gst_structure_set(s, "world-velocity-x", G_TYPE_DOUBLE, plane->velocity.x, "world-velocity-y",
+                      G_TYPE_DOUBLE, plane->velocity.y, nullptr);
   return s;
 }
 
@@ -164,6 +167,8 @@ void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& in
     if (i < planes.size() && planes[i]) {
       const pickdetect::PlaneInstance& plane = *planes[i];
       out.calibrated = TRUE;
+      out.world_velocity_x = plane.velocity.x;
+      out.world_velocity_y = plane.velocity.y;
       out.world_x = plane.center.x;
       out.world_y = plane.center.y;
       out.world_angle = plane.angle;
@@ -451,8 +456,19 @@ GstFlowReturn attach_frame(GstElement* element, GstBuffer* buffer, const FrameFo
             G_TYPE_INT, c.total, "running-time", G_TYPE_UINT64, static_cast<guint64>(now),
             nullptr));
     }
-    const PlaneInstances planes =
-        locate_all(element, detection, detector, config.calibration.get());
+    PlaneInstances planes = locate_all(element, detection, detector, config.calibration.get());
+    for (size_t i = 0; i < planes.size() && i < tracks.size(); ++i)
+      if (planes[i]) {
+        const pickdetect::Instance& in = detection.instances[i];
+        try {
+          planes[i]->velocity =
+              pickdetect::velocity_on_plane(cv::Point2d(in.center), tracks[i].velocity,
+                                            *config.calibration, model_height(detector, in));
+        } catch (const std::exception& e) {
+          GST_WARNING_OBJECT(element, "no velocity on the plane for %s at (%.1f, %.1f): %s",
+                             in.model_name.c_str(), in.center.x, in.center.y, e.what());
+        }
+      }
     attach_metas(buffer, detection.instances, planes, detector,
                  GST_VIDEO_INFO_WIDTH(&format.info()), GST_VIDEO_INFO_HEIGHT(&format.info()),
                  tracks, motion);

@@ -14,7 +14,10 @@
  * center_x, center_y, angle, scale, score, matches, visibility, covered, pickable, pick_order,
  * grasp_x, grasp_y, grasp_angle, points and outline ([[x, y], ...], pixels), height and
  * calibrated, and, when calibrated (pickdetect's calibration property), world_x, world_y,
- * world_angle, grasp_world_x, grasp_world_y and world_outline (millimetres on the work plane).
+ * world_angle, grasp_world_x, grasp_world_y and world_outline (millimetres on the work plane);
+ * with tracking (pickdetect's tracking property), track_id, first_seen (ns), frames_seen,
+ * velocity_x, velocity_y (pixels per second), tracked, and, when calibrated too,
+ * world_velocity_x and world_velocity_y (millimetres per second).
  * The format, with an example, is in docs/robot-output.md.
  *
  * #GstPickDetectJson:add-empty-results chooses whether frames with no instance (or with no
@@ -145,8 +148,22 @@ void add_instance(JsonBuilder* b, const GstPickDetectInstance& in) {
     add_number(b, "grasp_world_y", in.grasp_world_y);
     add_points(b, "world_outline", in.world_outline, in.n_world_outline);
   }
-  // A track id (and a velocity in mm/s) go here once the meta carries them (tracking, issue 18);
-  // it has none yet, so none is written.
+  if (in.track_id != 0) { // tracking (pickdetect's tracking property)
+    json_builder_set_member_name(b, "track_id");
+    json_builder_add_int_value(b, static_cast<gint64>(in.track_id));
+    json_builder_set_member_name(b, "first_seen");
+    json_builder_add_int_value(b, static_cast<gint64>(in.first_seen));
+    json_builder_set_member_name(b, "frames_seen");
+    json_builder_add_int_value(b, in.frames_seen);
+    add_number(b, "velocity_x", in.velocity_x);
+    add_number(b, "velocity_y", in.velocity_y);
+    json_builder_set_member_name(b, "tracked");
+    json_builder_add_boolean_value(b, in.tracked);
+    if (in.calibrated) {
+      add_number(b, "world_velocity_x", in.world_velocity_x);
+      add_number(b, "world_velocity_y", in.world_velocity_y);
+    }
+  }
   json_builder_end_object(b);
 }
 

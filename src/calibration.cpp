@@ -433,4 +433,17 @@ PlaneInstance locate_on_plane(const Instance& instance, const Calibration& calib
   return out;
 }
 
+cv::Point2d velocity_on_plane(const cv::Point2d& pixel, const cv::Point2d& pixels_per_s,
+                              const Calibration& calibration, double height_mm) {
+  // One pixel along the motion, mapped: the plane map is smooth at that scale, and the lens
+  // bends so short a step as little as anything can.
+  const double speed = std::hypot(pixels_per_s.x, pixels_per_s.y);
+  if (!std::isfinite(speed) || speed <= 0.0)
+    return {0.0, 0.0};
+  const cv::Point2d step = pixels_per_s * (1.0 / speed);
+  const cv::Point2d from = calibration.to_plane(pixel, height_mm);
+  const cv::Point2d to = calibration.to_plane(pixel + step, height_mm);
+  return (to - from) * speed;
+}
+
 } // namespace pickdetect

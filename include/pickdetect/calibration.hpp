@@ -118,11 +118,22 @@ struct PlaneInstance {
   double angle = 0.0; ///< Degrees in [0, 360), from the plane's x axis towards its y axis.
   cv::Point2d grasp;
   std::vector<cv::Point2d> outline;
+  /// With tracking, the motion on the plane in millimetres per second (velocity_on_plane); 0
+  /// otherwise.
+  cv::Point2d velocity;
 };
 
 /// The instance's centre, grasp point, outline and angle on the plane, its top face lying
 /// `height_mm` above it (the model's height). Throws Error as Calibration::to_plane().
 PICKDETECT_API PlaneInstance locate_on_plane(const Instance& instance,
+                                             const Calibration& calibration,
+                                             double height_mm = 0.0);
+
+/// A motion of `pixels_per_s` (frame pixels per second) at `pixel` as millimetres per second on
+/// the plane raised by `height_mm`: the plane map's local change along the motion. Throws Error
+/// as Calibration::to_plane().
+PICKDETECT_API cv::Point2d velocity_on_plane(const cv::Point2d& pixel,
+                                             const cv::Point2d& pixels_per_s,
                                              const Calibration& calibration,
                                              double height_mm = 0.0);
 

@@ -220,6 +220,42 @@ void check_points(JsonObject* o, const char* name, const GstPickDetectPoint* poi
   }
 }
 
+GST_START_TEST(test_velocity_on_the_plane_in_millimetres_per_second) {
+  // The three boxes ride 6 mm along the plane's x axis per frame, at 10 frames a second: 60 mm/s
+  // on the plane, whatever the perspective makes of it in pixels.
+  const Cell cell;
+  const cv::Mat box = box_picture();
+  const std::string launch =
+      "pickdetect model=\"" + cell.model + "\" calibration=\"" + cell.calibration + "\"";
+  GstHarness* h = gst_harness_new_parse(launch.c_str());
+  GstBuffer* last = nullptr;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<cs::Box> moved = kBoxes;
+    for (cs::Box& b : moved)
+      b.center.x += 6.0 * k;
+    const cv::Mat frame = cs::render_boxes(cell.camera, cell.rays, box, moved);
+    if (k == 0)
+      gst_harness_set_src_caps_str(h, gray_caps(frame.size()).c_str());
+    if (last)
+      gst_buffer_unref(last);
+    last = gst_harness_push_and_pull(h, gray_buffer(frame, k * GST_SECOND / 10));
+  }
+  const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(last);
+  fail_unless(meta && meta->n_instances == kBoxes.size());
+  for (guint i = 0; i < meta->n_instances; i++) {
+    const GstPickDetectInstance& in = meta->instances[i];
+    fail_unless(in.calibrated && in.track_id != 0 && in.frames_seen == 3);
+    fail_unless(std::abs(in.world_velocity_x - 60.0) < 3.0 && std::abs(in.world_velocity_y) < 3.0,
+                "box at (%.1f, %.1f) mm: expected (60, 0) mm/s on the plane, got (%.2f, %.2f) "
+                "(%.1f, %.1f px/s in the frame)",
+                in.world_x, in.world_y, in.world_velocity_x, in.world_velocity_y, in.velocity_x,
+                in.velocity_y);
+  }
+  gst_buffer_unref(last);
+  gst_harness_teardown(h);
+}
+GST_END_TEST;
+
 GST_START_TEST(test_json_lines_match_the_metas) {
   const Cell cell;
   const cv::Mat box = box_picture();
@@ -281,7 +317,16 @@ GST_START_TEST(test_json_lines_match_the_metas) {
     check_number(o, "grasp_world_x", in.grasp_world_x);
     check_number(o, "grasp_world_y", in.grasp_world_y);
     check_points(o, "world_outline", in.world_outline, in.n_world_outline);
-    fail_unless(!json_object_has_member(o, "track_id"), "no tracking yet, so no track id");
+    // Tracking is on by default: the track fields, and the velocity on the plane.
+    fail_unless(in.track_id != 0, "tracking is on by default: every instance has a track id");
+    fail_unless_equals_int(json_object_get_int_member(o, "track_id"), in.track_id);
+    fail_unless_equals_int(json_object_get_int_member(o, "first_seen"), in.first_seen);
+    fail_unless_equals_int(json_object_get_int_member(o, "frames_seen"), in.frames_seen);
+    check_number(o, "velocity_x", in.velocity_x);
+    check_number(o, "velocity_y", in.velocity_y);
+    fail_unless(json_object_get_boolean_member(o, "tracked") == static_cast<bool>(in.tracked));
+    check_number(o, "world_velocity_x", in.world_velocity_x);
+    check_number(o, "world_velocity_y", in.world_velocity_y);
   }
   g_object_unref(parser);
 
@@ -385,6 +430,7 @@ Suite* robot_suite() {
   tcase_set_timeout(tc, 600);
   suite_add_tcase(s, tc);
   tcase_add_test(tc, test_world_positions_within_half_a_millimetre);
+  tcase_add_test(tc, test_velocity_on_the_plane_in_millimetres_per_second);
   tcase_add_test(tc, test_json_lines_match_the_metas);
   tcase_add_test(tc, test_bad_calibration_fails_the_start_naming_the_file);
   return s;

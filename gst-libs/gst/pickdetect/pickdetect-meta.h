@@ -84,6 +84,9 @@ typedef struct {
  * @velocity_y: motion in pixels per second, y
  * @tracked: %TRUE when not detected in this frame but carried forward from the earlier ones
  *   (its pose predicted; never pickable)
+ * @world_velocity_x: with tracking and a calibration (@calibrated), the motion on the work
+ *   plane in millimetres per second, x; 0 otherwise
+ * @world_velocity_y: the same, y
  *
  * One object instance. Inside a meta every array belongs to the meta. The world fields (on the
  * work plane, in millimetres, lens distortion and the model's height accounted for) come after
@@ -126,6 +129,8 @@ typedef struct {
   gdouble velocity_x;
   gdouble velocity_y;
   gboolean tracked;
+  gdouble world_velocity_x;
+  gdouble world_velocity_y;
 } GstPickDetectInstance;
 
 typedef struct _GstPickDetectMeta GstPickDetectMeta;
