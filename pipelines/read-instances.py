@@ -65,34 +65,42 @@ def main():
 
     roi_api = GstVideo.VideoRegionOfInterestMeta.get_info().api
     frame = [0]
+    first_id = [0]  # The lowest ROI id of the last frame: where to look from in the next one.
 
     def on_buffer(pad, info):
         buf = info.get_buffer()
         n = buf.get_n_meta(roi_api)
         found = 0
-        roi_id = 0
-        # ROI ids are unique within a buffer; pickdetect numbers its own consecutively.
-        while found < n and roi_id < n + 1024:
+        roi_id = first_id[0]
+        lowest = None
+        # ROI ids are unique within a buffer. With tracking (the default) pickdetect gives each
+        # ROI its instance's track id, which only grows; without, it numbers them from 0.
+        while found < n and roi_id < first_id[0] + n + 1024:
             roi = GstVideo.buffer_get_video_region_of_interest_meta_id(buf, roi_id)
             roi_id += 1
             if roi is None:
                 continue
             found += 1
+            lowest = roi.id if lowest is None else min(lowest, roi.id)
             s = roi.get_param("pick-instance")
             if s is None:
                 continue  # Someone else's region of interest.
             d = lambda name: s.get_double(name)[1]
             i = lambda name: s.get_int(name)[1]
+            has_track, track_id = s.get_uint64("track-id")
             print("frame=%d pts=%s roi=%d model=%s center=(%.2f,%.2f) angle=%.2f scale=%.3f "
                   "score=%.3f matches=%d visibility=%.2f covered=%s pickable=%s pick-order=%d "
-                  "grasp=(%.2f,%.2f) bbox=%d,%d+%dx%d points=%d"
+                  "grasp=(%.2f,%.2f) bbox=%d,%d+%dx%d points=%d%s"
                   % (frame[0], Gst.TIME_ARGS(buf.pts), roi.id, GLib.quark_to_string(roi.roi_type),
                      d("center-x"), d("center-y"), d("angle"), d("scale"), d("score"),
                      i("matches"), d("visibility"),
                      "yes" if s.get_boolean("covered")[1] else "no",
                      "yes" if s.get_boolean("pickable")[1] else "no", i("pick-order"),
                      d("grasp-x"), d("grasp-y"), roi.x, roi.y, roi.w, roi.h,
-                     len(list(s.get_value("points"))) // 2))
+                     len(list(s.get_value("points"))) // 2,
+                     " track=%d" % track_id if has_track else ""))
+        if lowest is not None:
+            first_id[0] = lowest
         if found == 0:
             print("frame=%d pts=%s instances=0" % (frame[0], Gst.TIME_ARGS(buf.pts)))
         sys.stdout.flush()

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 # SPDX-License-Identifier: LGPL-2.1-or-later
 """Runs pipelines/read-instances.py on OpenCV's box_in_scene.png (model box.png) and checks that
-it prints, for each of the 3 frames, one instance line with the box where it is in the picture.
+it prints, for each of the 3 frames, one instance line with the box where it is in the picture,
+under one track id.
 
 Usage: check-read-instances.py READ_INSTANCES_PY BUILD_DIR DATA_DIR
 """
@@ -26,13 +27,15 @@ if result.returncode != 0:
 # The basmati box lies on its right edge and a bag on a corner: covered, not to be picked.
 line = re.compile(r"^frame=(\d+) pts=\S+ roi=\d+ model=box center=\(([\d.]+),([\d.]+)\) "
                   r"angle=([\d.]+) scale=([\d.]+) score=([\d.]+) matches=(\d+) .*covered=yes pickable=no "
-                  r"pick-order=0 .*bbox=\d+,\d+\+\d+x\d+ points=5$")
+                  r"pick-order=0 .*bbox=\d+,\d+\+\d+x\d+ points=5 track=(\d+)$")
 frames = []
+tracks = set()
 for text in result.stdout.splitlines():
     m = line.match(text)
     if not m:
         sys.exit("unexpected line: %r" % text)
-    frame, x, y, angle, scale, score, matches = m.groups()
+    frame, x, y, angle, scale, score, matches, track = m.groups()
+    tracks.add(int(track))
     x, y, angle, scale = float(x), float(y), float(angle), float(scale)
     if abs(x - 187) > 5 or abs(y - 224) > 5:
         sys.exit("box centre (%.1f, %.1f) is not near (187, 224)" % (x, y))
@@ -43,4 +46,6 @@ for text in result.stdout.splitlines():
     frames.append(int(frame))
 if frames != [0, 1, 2]:
     sys.exit("expected one instance in each of frames 0, 1, 2, got frames %s" % frames)
+if len(tracks) != 1 or 0 in tracks:
+    sys.exit("the one box should keep one track id over the three frames, got %s" % sorted(tracks))
 print("read-instances.py: ok")
