@@ -7,6 +7,7 @@
 #   meta-api-valgrind    valgrind cannot run an ASan binary
 #   meta-api-pkg-config  links a plain cc program against the instrumented meta library
 #   read-instances       python3 dlopens the instrumented plugin
+#   count-objects        python3 dlopens the instrumented plugin, as read-instances
 #   record-annotated     gst-launch-1.0 dlopens the instrumented plugin
 #   eval-end-to-end      python3 + GStreamer's Python bindings, as read-instances
 #   json-tcp, json-mqtt  gst-launch-1.0 (pipelines/serve-json-tcp.sh, publish-mqtt.sh) dlopens
@@ -31,7 +32,7 @@ export LSAN_OPTIONS="suppressions=$supp:print_suppressions=0"
 export GST_REGISTRY_FORK=no
 
 skip=(meta-api-valgrind meta-api-pkg-config read-instances record-annotated eval-end-to-end
-  json-tcp json-mqtt)
+  json-tcp json-mqtt count-objects)
 tests=()
 if [ $# -eq 0 ]; then
   while read -r name; do
