@@ -366,7 +366,10 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
     const std::vector<cv::Point2f> predicted_outline = shifted(track.last.outline, offset);
     for (const Instance& det : detected)
       replaced = replaced || hull_iou(predicted_outline, det.outline) > 0.3;
-    if (unseen_ms > 0.0 && unseen_ms <= settings_.carry_forward_ms && !replaced) {
+    const bool moving =
+        track.has_velocity &&
+        cv::norm(track.velocity) >= settings_.carry_forward_min_speed * object_size(track.last);
+    if (unseen_ms > 0.0 && unseen_ms <= settings_.carry_forward_ms && !replaced && moving) {
       TrackedInstance ti;
       ti.instance = moved(track.last, offset);
       ti.instance.pickable = false;

@@ -21,8 +21,12 @@ struct TrackerSettings {
   /// A track not detected for longer than this (milliseconds) ends; until then it keeps its id
   /// and is found again where its motion says it should be.
   double timeout_ms = 500.0;
-  /// An unseen track is still reported (carried forward, `tracked`) for this long, in ms.
+  /// An unseen track is still reported (carried forward, `tracked`) for this long, in ms...
   double carry_forward_ms = 70.0;
+  /// ...when it moves at least this fast, in object sizes per second: a moving object missed by
+  /// one frame's detection is where its motion says; a still one that is not seen any more was
+  /// most likely taken away (a pick from a bin), and is not reported.
+  double carry_forward_min_speed = 0.5;
   /// A detection may continue a track when its centre lies within this distance of the track's
   /// predicted centre, in object sizes (square root of the outline's area). Grows by
   /// `gate_growth` per frame the track went unseen, up to `max_gate`.

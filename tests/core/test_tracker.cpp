@@ -225,6 +225,17 @@ TEST(Tracker, PickedFromABinEndsAndTheOthersKeepTheirIds) {
   EXPECT_EQ(tracker.live_tracks(), 2u);
 }
 
+TEST(Tracker, AStillObjectNoLongerSeenIsNotCarriedForward) {
+  // A pick from a bin: the picked box must not be reported where it was, not even for a frame.
+  Tracker tracker;
+  const std::vector<Instance> bin = {box({300.f, 300.f}), box({500.f, 320.f})};
+  for (int f = 0; f < 5; f++)
+    tracker.update(bin, f * kFrameNs, kFrame);
+  const TrackedFrame out = tracker.update({bin[0]}, 5 * kFrameNs, kFrame);
+  ASSERT_EQ(out.instances.size(), 1u) << "the picked box is reported carried forward";
+  EXPECT_FALSE(out.instances[0].tracked);
+}
+
 TEST(Tracker, OnlyTheSameModelContinuesATrack) {
   Tracker tracker;
   const std::uint64_t a =
