@@ -9,6 +9,7 @@
 #include <pickdetect/pose.hpp>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -42,8 +43,32 @@ constexpr double kOwnShare = 0.9;
 /// 5 % and more.
 constexpr double kMinSpread = 0.03;
 
+/// Whether descriptor row `a` of `as` lies within `limit` of row `b` of `bs`: L2 for SIFT's
+/// floats, stopping as soon as the sum passes the limit (most pairs differ early); Hamming for
+/// ORB's bits.
+bool close_descriptors(const cv::Mat& as, int a, const cv::Mat& bs, int b, double limit,
+                       FeatureKind kind) {
+  if (kind == FeatureKind::Orb)
+    return cv::hal::normHamming(as.ptr<uchar>(a), bs.ptr<uchar>(b), as.cols) <= limit;
+  const float* x = as.ptr<float>(a);
+  const float* y = bs.ptr<float>(b);
+  const double bound = limit * limit;
+  double sum = 0.0;
+  for (int i = 0; i < as.cols; i += 16) {
+    const int end = std::min(as.cols, i + 16);
+    for (int j = i; j < end; ++j) {
+      const double d = static_cast<double>(x[j]) - y[j];
+      sum += d * d;
+    }
+    if (sum > bound)
+      return false;
+  }
+  return true;
+}
+
 /// The scene keypoints (indices) that instance `inst` of `model` explains.
-std::vector<int> explained(const Instance& inst, const PointGrid& model_grid, double model_radius,
+std::vector<int> explained(const Instance& inst, const cv::Rect2f& model_box,
+                           const PointGrid& model_grid, double model_radius,
                            const Features& model_features, const Features& scene,
                            const PointGrid& scene_grid, FeatureKind kind) {
   std::vector<int> out;
@@ -52,18 +77,19 @@ std::vector<int> explained(const Instance& inst, const PointGrid& model_grid, do
     return out;
   const cv::Rect2f box = bounds(inst.outline);
   const double limit = kind == FeatureKind::Orb ? kAgreeOrbDistance : kAgreeSiftDistance;
-  const int norm = kind == FeatureKind::Orb ? cv::NORM_HAMMING : cv::NORM_L2;
   for (int s : scene_grid.inside(box)) {
     const cv::KeyPoint& ks = scene.keypoints[s];
-    if (cv::pointPolygonTest(inst.outline, ks.pt, false) < 0)
-      continue;
     const cv::Vec3d q = back * cv::Vec3d(ks.pt.x, ks.pt.y, 1.0);
     if (!(q[2] > 0.0))
       continue;
     const cv::Point2d at(q[0] / q[2], q[1] / q[2]);
-    double best = limit;
+    // On the model's outline (its box: no model keypoint lies beyond the outline to agree).
+    if (!in_box(model_box, cv::Point2f(static_cast<float>(at.x), static_cast<float>(at.y))))
+      continue;
     bool agrees = false;
     model_grid.for_neighbours(at, [&](int k) {
+      if (agrees) // One model keypoint that agrees is enough.
+        return;
       const cv::KeyPoint& km = model_features.keypoints[k];
       const cv::Point2d d(km.pt.x - at.x, km.pt.y - at.y);
       if (d.dot(d) > model_radius * model_radius)
@@ -73,12 +99,7 @@ std::vector<int> explained(const Instance& inst, const PointGrid& model_grid, do
       const double ratio = km.size > 0.f ? ks.size / km.size / inst.scale : 1.0;
       if (ratio > kScaleFactor || ratio < 1.0 / kScaleFactor)
         return;
-      const double dist =
-          cv::norm(scene.descriptors.row(s), model_features.descriptors.row(k), norm);
-      if (dist <= best) {
-        best = dist;
-        agrees = true;
-      }
+      agrees = close_descriptors(scene.descriptors, s, model_features.descriptors, k, limit, kind);
     });
     if (agrees)
       out.push_back(s);
@@ -144,7 +165,8 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
       model_grid[inst.model] = PointGrid(std::move(pts), radius[inst.model]);
       built[inst.model] = 1;
     }
-    explains[i] = explained(inst, model_grid[inst.model], r, f, scene, scene_grid, kind);
+    explains[i] = explained(inst, bounds(model.outline), model_grid[inst.model], r, f, scene,
+                            scene_grid, kind);
   }
 
   std::vector<size_t> order(n);
