@@ -146,27 +146,32 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
     smallest_side = std::min(smallest_side, model_side(models[inst.model]) * inst.scale);
   const PointGrid scene_grid(std::move(at), std::max(8.0, 0.5 * smallest_side));
 
-  // Each model's keypoints on a grid of the search radius, built for the models found.
+  // Each instance's search radius in model pixels; each model's keypoints on one grid whose
+  // cells are the largest radius its instances need (so that the 3x3 cells around a point
+  // hold every keypoint within any of them), built once for the models found.
+  std::vector<double> radius(n);
+  std::vector<double> cell(models.size(), 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    const Instance& inst = instances[i];
+    radius[i] = std::max(kMinPlacePx / std::max(inst.scale, 1e-3),
+                         kPlaceShare * model_side(models[inst.model]));
+    cell[inst.model] = std::max(cell[inst.model], radius[i]);
+  }
   std::vector<PointGrid> model_grid(models.size());
-  std::vector<double> radius(models.size(), 0.0);
-  std::vector<char> built(models.size(), 0);
+  for (size_t m = 0; m < models.size(); ++m) {
+    if (!(cell[m] > 0.0))
+      continue;
+    std::vector<cv::Point2f> pts;
+    for (const cv::KeyPoint& k : models[m].features(kind).keypoints)
+      pts.push_back(k.pt);
+    model_grid[m] = PointGrid(std::move(pts), cell[m]);
+  }
   std::vector<std::vector<int>> explains(n);
   for (size_t i = 0; i < n; ++i) {
     const Instance& inst = instances[i];
     const Model& model = models[inst.model];
-    const Features& f = model.features(kind);
-    const double r =
-        std::max(kMinPlacePx / std::max(inst.scale, 1e-3), kPlaceShare * model_side(model));
-    if (!built[inst.model] || radius[inst.model] < r) {
-      std::vector<cv::Point2f> pts;
-      for (const cv::KeyPoint& k : f.keypoints)
-        pts.push_back(k.pt);
-      radius[inst.model] = std::max(r, radius[inst.model]);
-      model_grid[inst.model] = PointGrid(std::move(pts), radius[inst.model]);
-      built[inst.model] = 1;
-    }
-    explains[i] = explained(inst, bounds(model.outline), model_grid[inst.model], r, f, scene,
-                            scene_grid, kind);
+    explains[i] = explained(inst, bounds(model.outline), model_grid[inst.model], radius[i],
+                            model.features(kind), scene, scene_grid, kind);
   }
 
   std::vector<size_t> order(n);
