@@ -35,8 +35,6 @@ constexpr float kRepeatOrbDistance = 20.f;
 /// two keypoints of one spot at other orientations are not taken for copies.
 constexpr float kRepeatGapSizes = 2.f;
 constexpr float kMinRepeatGapPx = 8.f;
-/// Copies searched per model keypoint (a bundle of up to this many identical packs).
-constexpr int kRepeatNeighbours = 12;
 
 int find_root(std::vector<int>& parent, int i) {
   while (parent[i] != i)
@@ -80,27 +78,37 @@ void Matcher::find_repeats(const std::vector<Model>& models) {
   std::vector<int> parent(n);
   for (int i = 0; i < n; ++i)
     parent[i] = i;
-  if (n >= 2) {
-    // The picture matched against itself, exhaustively: the groups must not depend on the
-    // kd-tree's approximations.
-    const int k = std::min(n, kRepeatNeighbours + 1);
-    cv::Mat indices, distances;
-    nearest(descriptors_, k, Search::BruteForce, indices, distances);
-    const float limit = kind_ == FeatureKind::Orb ? kRepeatOrbDistance : kRepeatSiftDistance;
-    for (int i = 0; i < n; ++i) {
-      const int m = owner_[i];
-      const cv::KeyPoint& a = models[m].features(kind_).keypoints[i - offset_[m]];
-      for (int j = 0; j < k; ++j) {
-        const int other = indices.at<int>(i, j);
-        if (other < 0 || other == i || owner_[other] != m || distances.at<float>(i, j) > limit)
-          continue;
-        const cv::KeyPoint& b = models[m].features(kind_).keypoints[other - offset_[m]];
-        const float gap = std::max(kMinRepeatGapPx, kRepeatGapSizes * std::max(a.size, b.size));
-        const cv::Point2f d = a.pt - b.pt;
-        if (d.dot(d) < gap * gap)
-          continue;
-        parent[find_root(parent, i)] = find_root(parent, other);
-      }
+  // Each model's picture matched against itself, exhaustively (the groups must not depend on
+  // the kd-tree's approximations), every descriptor within the limit: copies are found however
+  // many views of one spot lie nearer, and other models' descriptors cost nothing.
+  const float limit = kind_ == FeatureKind::Orb ? kRepeatOrbDistance : kRepeatSiftDistance;
+  cv::BFMatcher bf(kind_ == FeatureKind::Orb ? cv::NORM_HAMMING : cv::NORM_L2);
+  for (size_t m = 0; m < models.size(); ++m) {
+    const int first = offset_[m];
+    const int rows = (m + 1 < offset_.size() ? offset_[m + 1] : n) - first;
+    if (rows < 2)
+      continue;
+    const cv::Mat own = descriptors_.rowRange(first, first + rows);
+    const auto& kps = models[m].features(kind_).keypoints;
+    // In blocks of rows: a picture of one fine repeated texture has most of its descriptors
+    // within the limit of each other.
+    for (int start = 0; start < rows; start += kSearchBlock) {
+      const int end = std::min(rows, start + kSearchBlock);
+      std::vector<std::vector<cv::DMatch>> near;
+      bf.radiusMatch(own.rowRange(start, end), own, near, limit);
+      for (int i = start; i < end; ++i)
+        for (const cv::DMatch& d : near[i - start]) {
+          const int j = d.trainIdx;
+          if (j == i)
+            continue;
+          const cv::KeyPoint& a = kps[i];
+          const cv::KeyPoint& b = kps[j];
+          const float gap = std::max(kMinRepeatGapPx, kRepeatGapSizes * std::max(a.size, b.size));
+          const cv::Point2f apart = a.pt - b.pt;
+          if (apart.dot(apart) < gap * gap)
+            continue;
+          parent[find_root(parent, first + i)] = find_root(parent, first + j);
+        }
     }
   }
   group_.resize(n);
