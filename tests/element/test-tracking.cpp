@@ -273,6 +273,34 @@ GST_START_TEST(test_count_line_counts_each_once) {
 }
 GST_END_TEST;
 
+GST_START_TEST(test_qos_drops_keep_tracks) {
+  // Frames the base transform's QoS drops (a sink reporting the stream late) never reach the
+  // tracker: the tracks bridge them like a gap in the timestamps, keeping their ids.
+  GstHarness* h = pickdetect::test_harness::pickdetect_harness("model", kBoxPath.c_str());
+  gst_harness_set_src_caps_str(h, caps().c_str());
+  const std::vector<guint64> ids = run_belt(h, 0, 3);
+  // Frame 2 reached the sink one frame late: frames due before about two frames later are
+  // dropped.
+  fail_unless(gst_harness_push_upstream_event(
+      h, gst_event_new_qos(GST_QOS_TYPE_UNDERFLOW, 2.0, static_cast<GstClockTimeDiff>(kFrame),
+                           2 * kFrame)));
+  int out_count = 0;
+  std::vector<guint64> last;
+  for (int i = 3; i < 9; i++) {
+    fail_unless_equals_int(gst_harness_push(h, belt_frame(i, kFrame * i)), GST_FLOW_OK);
+    while (GstBuffer* out = gst_harness_try_pull(h)) {
+      last = track_ids(out);
+      fail_unless(last == ids, "ids changed across frames dropped by QoS");
+      out_count++;
+      gst_buffer_unref(out);
+    }
+  }
+  fail_unless(out_count > 0 && out_count < 6, "%d of 6 frames came out: QoS dropped none or all",
+              out_count);
+  gst_harness_teardown(h);
+}
+GST_END_TEST;
+
 static Suite* tracking_suite(void) {
   Suite* s = suite_create("tracking");
   TCase* tc = tcase_create("tracking");
@@ -282,6 +310,7 @@ static Suite* tracking_suite(void) {
   tcase_add_test(tc, test_tracking_off_gives_frame_by_frame);
   tcase_add_test(tc, test_stream_events_reset_or_keep);
   tcase_add_test(tc, test_count_line_counts_each_once);
+  tcase_add_test(tc, test_qos_drops_keep_tracks);
   return s;
 }
 
