@@ -301,6 +301,27 @@ GST_START_TEST(test_qos_drops_keep_tracks) {
 }
 GST_END_TEST;
 
+GST_START_TEST(test_timestamps_going_back_reset_tracks) {
+  // A frame stamped before the previous one (a source restarted without a new segment): the
+  // motion between them means nothing, so the tracks end and the next get new ids.
+  GstHarness* h = pickdetect::test_harness::pickdetect_harness("model", kBoxPath.c_str());
+  GstBus* bus = gst_bus_new();
+  gst_element_set_bus(h->element, bus);
+  gst_harness_set_src_caps_str(h, caps().c_str());
+  const std::vector<guint64> ids = run_belt(h, 0, 4);
+  ended(bus);
+  GstBuffer* out = gst_harness_push_and_pull(h, belt_frame(4, kFrame)); // after frame 3's
+  const std::vector<guint64> after = track_ids(out);
+  gst_buffer_unref(out);
+  fail_unless_equals_int(after.size(), 2);
+  fail_unless(after[0] > ids[1] && after[1] > ids[1], "tracks kept across time going back");
+  fail_unless(ended(bus) == std::vector<std::string>({"reset", "reset"}));
+  gst_element_set_bus(h->element, nullptr);
+  gst_object_unref(bus);
+  gst_harness_teardown(h);
+}
+GST_END_TEST;
+
 static Suite* tracking_suite(void) {
   Suite* s = suite_create("tracking");
   TCase* tc = tcase_create("tracking");
@@ -311,6 +332,7 @@ static Suite* tracking_suite(void) {
   tcase_add_test(tc, test_stream_events_reset_or_keep);
   tcase_add_test(tc, test_count_line_counts_each_once);
   tcase_add_test(tc, test_qos_drops_keep_tracks);
+  tcase_add_test(tc, test_timestamps_going_back_reset_tracks);
   return s;
 }
 
