@@ -15,7 +15,9 @@ namespace pickdetect::detail {
 /// pose puts that keypoint (same place, rotation and size). Instances are taken in order of how
 /// many keypoints they explain, each keypoint going to the first that explains it; an instance
 /// is kept only when it still explains at least `min_matches` keypoints of its own, nearly all
-/// of those it explains are its own, and they spread over enough of the model to place it. A copy
+/// of those it explains are its own, and they spread over enough of the model to place it; one
+/// that rests on few matches must also explain more than the chance share of the keypoints on
+/// its outline (a few agree by chance wherever the frame is dense with print). A copy
 /// of an instance shifted along a repeated design, a second pose of one object and an instance
 /// spanning two neighbours rest on keypoints that a better instance explains, and lose to it.
 void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& models,

@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -119,6 +120,50 @@ TEST(SceneExplanation, AFaceTiltedFarFromTheCameraIsPlacedByAllItsEvidence) {
     EXPECT_LT(cv::norm(inst.points[k] - truth[k]), 3.0)
         << "principal point " << k << ": expected (" << truth[k].x << ", " << truth[k].y
         << "), got (" << inst.points[k].x << ", " << inst.points[k].y << ")";
+}
+
+TEST(SceneExplanation, AFewAgreeingKeypointsInClutterDoNotMakeAnInstance) {
+  // Left: one box. Right: dense print of no model (OpenCV's baboon) where a few small pieces
+  // of the box's print lie just where one pose of the box would put them: a handful of
+  // keypoints agree with that pose, as a few do by chance in clutter, among the hundreds the
+  // clutter holds there.
+  const Model& model = box_model();
+  const double scale = 1.0;
+  const cv::Size frame(2 * model.image.cols + 240, model.image.rows + 160);
+  cv::Mat scene = test_scene::plain_background(frame, 90);
+  const std::vector<Pose> poses = {
+      {{80.f + model.image.cols / 2.f, frame.height / 2.f}, 0.0, scale}};
+  test_scene::paste(scene, model.image, poses);
+  const cv::Mat print = cv::imread(test_scene::kData + "/baboon.jpg", cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(print.empty());
+  const cv::Rect clutter(160 + model.image.cols, 40, model.image.cols + 60, model.image.rows + 80);
+  cv::resize(print, scene(clutter), clutter.size(), 0, 0, cv::INTER_AREA);
+  // The ghost's pose: the box moved into the middle of the clutter, unturned.
+  const cv::Point offset(clutter.x + 30, clutter.y + 40);
+  const int piece = 40;
+  for (const cv::Point corner : {cv::Point(20, 20), cv::Point(model.image.cols - 60, 20),
+                                 cv::Point(20, model.image.rows - 60),
+                                 cv::Point(model.image.cols - 60, model.image.rows - 60)}) {
+    const cv::Rect from(corner, cv::Size(piece, piece));
+    model.image(from).copyTo(scene(from + offset));
+  }
+  const Features features = extract_features(scene);
+  std::vector<Instance> instances = box_detector().detect(features, scene.size()).instances;
+  const Instance* box = nearest(instances, poses[0].center);
+  ASSERT_NE(box, nullptr);
+  ASSERT_LT(cv::norm(box->center - poses[0].center), 1.5);
+  Instance truth = *box;
+  const cv::Point2f ghost_centre(offset.x + model.image.cols / 2.f,
+                                 offset.y + model.image.rows / 2.f);
+  const cv::Point2f shift = ghost_centre - truth.center;
+  const Instance ghost = moved(truth, cv::Matx33d(1, 0, shift.x, 0, 1, shift.y, 0, 0, 1));
+  truth.matches = 4; // both rest on as few matches as an instance may
+  instances = {truth, ghost};
+  instances[1].matches = 4;
+  detail::explain_scene(instances, box_detector().models(), features, FeatureKind::Sift, 4);
+  ASSERT_EQ(instances.size(), 1u) << "the pose over the clutter must be dropped, the box kept";
+  EXPECT_LT(cv::norm(instances[0].center - poses[0].center), 1.5)
+      << "kept: (" << instances[0].center.x << ", " << instances[0].center.y << ")";
 }
 
 } // namespace
