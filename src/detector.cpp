@@ -170,6 +170,7 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
         continue;
       inst.model = static_cast<int>(m);
       inst.model_name = ms.model.name;
+      inst.view = ms.model.view;
       inst.score = score_for(inst.matches);
       inst.grasp = inst.points[ms.model.grasp_point];
       inst.grasp_angle = inst.angle;

@@ -92,6 +92,13 @@ void drop_look_alikes(std::vector<Instance>& instances, int min_distinct_alone) 
       // `other` takes w's place when it explains w's evidence and is stronger.
       const bool same_features = shared(r, w);
       const bool on_w = same_features || explains(other, weak);
+      // Two views of one product in one place: the product is known, the view with more
+      // matches is the one seen. They are no rivals for naming the product.
+      if (other.model_name == weak.model_name) {
+        if (on_w && (other.matches > weak.matches || (other.matches == weak.matches && r < w)))
+          drop[w] = 1;
+        continue;
+      }
       if (on_w && stronger(r, w))
         drop[w] = 1;
       // Rivals for w's place: each explains the other (a box lying on another does not).

@@ -19,6 +19,8 @@ namespace pickdetect::detail {
 /// Of rivals, all but the one with the most distinct matches (then the most matches) go; that
 /// one stays only with at least kMinDistinct distinct matches and kDistinctMargin more than
 /// any rival had. Otherwise which product lies there is not known, and none is reported.
+/// Views of one product (models of one name) in one place are no rivals: the one with more
+/// matches stays, whatever their distinct matches.
 /// Any instance, rivals or not, needs at least `min_distinct_alone` distinct matches (the
 /// detector asks for half of min-matches).
 void drop_look_alikes(std::vector<Instance>& instances, int min_distinct_alone);

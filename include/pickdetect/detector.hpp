@@ -53,8 +53,9 @@ struct Settings {
 
 /// One object instance found in the frame, in scene pixels (y axis down).
 struct Instance {
-  int model = 0; ///< Index of the model in the detector's list.
-  std::string model_name;
+  int model = 0;          ///< Index of the model in the detector's list.
+  std::string model_name; ///< The product's name (Model::name).
+  std::string view;       ///< Which of the product's views it matched (Model::view; may be empty).
   std::vector<cv::Point2f> points;  ///< The model's principal points; [0] is the centre.
   std::vector<cv::Point2f> outline; ///< The model's outline carried into the scene.
   cv::Point2f center;
