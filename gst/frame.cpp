@@ -58,14 +58,15 @@ GstStructure* instance_structure(const pickdetect::Instance& instance,
                                  const std::optional<pickdetect::PlaneInstance>& plane,
                                  double height_mm, const pickdetect::TrackedInstance* track) {
   GstStructure* s = gst_structure_new(
-      "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "center-x",
-      G_TYPE_DOUBLE, static_cast<double>(instance.center.x), "center-y", G_TYPE_DOUBLE,
-      static_cast<double>(instance.center.y), "angle", G_TYPE_DOUBLE, instance.angle, "scale",
-      G_TYPE_DOUBLE, instance.scale, "score", G_TYPE_DOUBLE, instance.score, "matches", G_TYPE_INT,
-      instance.matches, "visibility", G_TYPE_DOUBLE, instance.visibility, "covered", G_TYPE_BOOLEAN,
-      static_cast<gboolean>(instance.covered), "pickable", G_TYPE_BOOLEAN,
-      static_cast<gboolean>(instance.pickable), "pick-order", G_TYPE_INT, instance.pick_order,
-      "grasp-x", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.x), "grasp-y", G_TYPE_DOUBLE,
+      "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "view", G_TYPE_STRING,
+      instance.view.c_str(), "center-x", G_TYPE_DOUBLE, static_cast<double>(instance.center.x),
+      "center-y", G_TYPE_DOUBLE, static_cast<double>(instance.center.y), "angle", G_TYPE_DOUBLE,
+      instance.angle, "scale", G_TYPE_DOUBLE, instance.scale, "score", G_TYPE_DOUBLE,
+      instance.score, "matches", G_TYPE_INT, instance.matches, "visibility", G_TYPE_DOUBLE,
+      instance.visibility, "covered", G_TYPE_BOOLEAN, static_cast<gboolean>(instance.covered),
+      "pickable", G_TYPE_BOOLEAN, static_cast<gboolean>(instance.pickable), "pick-order",
+      G_TYPE_INT, instance.pick_order, "grasp-x", G_TYPE_DOUBLE,
+      static_cast<double>(instance.grasp.x), "grasp-y", G_TYPE_DOUBLE,
       static_cast<double>(instance.grasp.y), "grasp-angle", G_TYPE_DOUBLE, instance.grasp_angle,
       nullptr);
   GValue points = double_array(instance.points);
@@ -136,6 +137,7 @@ void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& in
     std::vector<GstPickDetectPoint> outline = to_meta_points(in.outline);
     GstPickDetectInstance out{};
     out.model_name = const_cast<gchar*>(in.model_name.c_str());
+    out.view_name = const_cast<gchar*>(in.view.c_str());
     out.center_x = in.center.x;
     out.center_y = in.center.y;
     out.angle = in.angle;

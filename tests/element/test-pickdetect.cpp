@@ -272,6 +272,7 @@ static void check_structure_matches(const GstStructure* s, const GstPickDetectIn
   gint i;
   gboolean b;
   fail_unless_equals_string(gst_structure_get_string(s, "model"), in->model_name);
+  fail_unless_equals_string(gst_structure_get_string(s, "view"), in->view_name);
   fail_unless(gst_structure_get_double(s, "center-x", &d) && d == in->center_x);
   fail_unless(gst_structure_get_double(s, "center-y", &d) && d == in->center_y);
   fail_unless(gst_structure_get_double(s, "angle", &d) && d == in->angle);
@@ -837,6 +838,52 @@ GST_START_TEST(test_add_remove_model_while_playing) {
 }
 GST_END_TEST;
 
+// A model file listing two views of one product: each instance is of the product, with the view
+// it matched, in the meta, the ROI and its pick-instance param. The back (variant.png) shares
+// the front's left half: in one place the view with more matches is the one seen.
+GST_START_TEST(test_views_of_one_product) {
+  TempDir dir;
+  const std::string variant_path = write_variant(dir.path);
+  const std::string carton = dir.path + "/carton.yml";
+  fail_unless(
+      g_file_set_contents(carton.c_str(),
+                          ("%YAML:1.0\nname: carton\nviews:\n  - name: front\n    image: \"" +
+                           kBoxPath + "\"\n  - image: variant.png\n")
+                              .c_str(),
+                          -1, nullptr));
+  cv::Mat scene = make_scene(cv::Size(640, 480), nullptr, false);
+  paste(scene, box_model().image, kPoses[0]);
+  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
+  GstHarness* h = pickdetect_harness();
+  g_object_set(h->element, "model", carton.c_str(), nullptr);
+  gst_harness_set_src_caps_str(h, caps_string("GRAY8", cv::Size(640, 480)).c_str());
+  GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
+  const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
+  fail_unless(model_names(meta) == std::vector<std::string>({"carton", "carton"}));
+  for (int k = 0; k < 2; k++) {
+    const GstPickDetectInstance* in = nearest(meta, kPoses[k].x, kPoses[k].y);
+    fail_unless(in != nullptr);
+    fail_unless_equals_string(in->view_name, k == 0 ? "front" : "variant");
+  }
+  gpointer state = nullptr;
+  int rois = 0;
+  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
+             out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
+    auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+    fail_unless_equals_string(g_quark_to_string(roi->roi_type), "carton");
+    const GstStructure* s = roi_param(roi);
+    double x = 0, y = 0;
+    fail_unless(gst_structure_get_double(s, "center-x", &x) &&
+                gst_structure_get_double(s, "center-y", &y));
+    check_structure_matches(s, nearest(meta, x, y));
+    rois++;
+  }
+  fail_unless_equals_int(rois, 2);
+  gst_buffer_unref(out);
+  gst_harness_teardown(h);
+}
+GST_END_TEST;
+
 // A model-set file lists models relative to itself; a broken set, a missing model, two models of
 // one name or an empty list entry refuse the start, naming what is wrong.
 GST_START_TEST(test_model_set_file) {
@@ -1021,6 +1068,7 @@ static Suite* pickdetect_suite(void) {
   tcase_add_test(tc, test_look_alike_models);
   tcase_add_test(tc, test_add_remove_model_while_playing);
   tcase_add_test(tc, test_model_set_file);
+  tcase_add_test(tc, test_views_of_one_product);
   tcase_add_test(tc, test_pickable_and_covered);
   return s;
 }
