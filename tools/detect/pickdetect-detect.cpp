@@ -174,7 +174,8 @@ int main(int argc, char** argv) {
         throw pickdetect::Error(std::string("picture '") + argv[a] + "' cannot be read");
       cv::Mat grey;
       cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
-      const pickdetect::Detection d = detector.detect(grey, s);
+      // The colour tells look-alike products that differ in colour apart.
+      const pickdetect::Detection d = detector.detect(grey, bgr, s);
       if (json) {
         print_json(argv[a], d.instances);
         continue;
