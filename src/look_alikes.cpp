@@ -217,13 +217,16 @@ void decide_by_colour(std::vector<Instance>& instances, const std::vector<Model>
           colour_misfit(instances[i], models[static_cast<size_t>(instances[i].model)], frame_bgr);
     return misfit[i];
   };
+  std::vector<cv::Rect2f> box(n);
+  for (size_t i = 0; i < n; ++i)
+    box[i] = bounds(instances[i].outline);
   std::vector<char> lost(n, 0), won(n, 0);
   for (size_t a = 0; a < n; ++a)
     for (size_t b = a + 1; b < n; ++b) {
       const Instance& x = instances[a];
       const Instance& y = instances[b];
       if (x.model_name == y.model_name || models[x.model].colour.empty() ||
-          models[y.model].colour.empty() || !same_place(x, y))
+          models[y.model].colour.empty() || !touch(box[a], box[b]) || !same_place(x, y))
         continue;
       const double fa = misfit_of(a), fb = misfit_of(b);
       if (!std::isfinite(fa) || !std::isfinite(fb))
