@@ -224,9 +224,14 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
     if (valid < 2)
       continue;
     if (ambiguity == Ambiguity::Reject) {
+      // Another view of the same product is no rival for which product it is.
+      auto other_view = [&](int j) {
+        return owner_[idx[j]] != owner_[idx[0]] &&
+               product_[owner_[idx[j]]] == product_[owner_[idx[0]]];
+      };
       float second = dist[valid - 1];
       for (int j = 1; j < valid; ++j)
-        if (group_[idx[j]] != group_[idx[0]] && !same_place(idx[j], idx[0])) {
+        if (group_[idx[j]] != group_[idx[0]] && !same_place(idx[j], idx[0]) && !other_view(j)) {
           second = dist[j];
           break;
         }

@@ -19,7 +19,8 @@ namespace pickdetect {
 /// (look-alike products share parts of their design).
 enum class Ambiguity {
   /// The two nearest neighbours are searched over all models together: such a feature fails
-  /// the ratio test and decides for none (the paper's matching).
+  /// the ratio test and decides for none (the paper's matching). The views of one product
+  /// (models of one name) are no rivals: the second neighbour is searched beyond them.
   Reject,
   /// The models whose nearest descriptor fits nearly as well as the best of all are the
   /// feature's look-alikes. Each of their nearest is tested against the nearest descriptor
