@@ -13,6 +13,9 @@
 
 #include <cmath>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 using namespace pickdetect;
 using pickdetect::test_scene::Pose;
@@ -122,15 +125,20 @@ TEST_F(Colour, ModelsKeepTheirPicturesColour) {
 TEST_F(Colour, EachEditionIsNamedByTheFramesColour) {
   const cv::Mat scene = scene_of({{warm_, kLeft}, {cold_, kRight}});
   const Detector d = detector();
-  for (const double gain : {1.0, 0.6}) { // The light's gain does not change the colour.
-    const cv::Mat lit = scene * gain;
+  // The light's gain does not change the colour; a mild cast (blue / 1.15, red * 1.15) does
+  // not hide it.
+  const std::vector<std::pair<double, double>> lights = {{1.0, 1.0}, {0.6, 1.0}, {1.0, 1.15}};
+  for (const auto& [gain, cast] : lights) {
+    cv::Mat lit;
+    cv::multiply(scene, cv::Scalar(gain / cast, gain, gain * cast), lit);
     const std::vector<Instance> found = d.detect(grey_of(lit), lit).instances;
     const Instance* left = at(found, kLeft.center);
     const Instance* right = at(found, kRight.center);
-    ASSERT_TRUE(left && right) << "gain " << gain << ":" << describe(found);
-    EXPECT_EQ(found.size(), 2u) << "gain " << gain << ":" << describe(found);
-    EXPECT_EQ(left->model_name, "warm") << "gain " << gain << ":" << describe(found);
-    EXPECT_EQ(right->model_name, "cold") << "gain " << gain << ":" << describe(found);
+    const std::string light = "gain " + std::to_string(gain) + ", cast " + std::to_string(cast);
+    ASSERT_TRUE(left && right) << light << ":" << describe(found);
+    EXPECT_EQ(found.size(), 2u) << light << ":" << describe(found);
+    EXPECT_EQ(left->model_name, "warm") << light << ":" << describe(found);
+    EXPECT_EQ(right->model_name, "cold") << light << ":" << describe(found);
   }
 }
 
