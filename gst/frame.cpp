@@ -58,17 +58,17 @@ GstStructure* instance_structure(const pickdetect::Instance& instance,
                                  const std::optional<pickdetect::PlaneInstance>& plane,
                                  double height_mm, const pickdetect::TrackedInstance* track) {
   GstStructure* s = gst_structure_new(
-      "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "view", G_TYPE_STRING,
-      instance.view.c_str(), "center-x", G_TYPE_DOUBLE, static_cast<double>(instance.center.x),
-      "center-y", G_TYPE_DOUBLE, static_cast<double>(instance.center.y), "angle", G_TYPE_DOUBLE,
-      instance.angle, "scale", G_TYPE_DOUBLE, instance.scale, "score", G_TYPE_DOUBLE,
-      instance.score, "matches", G_TYPE_INT, instance.matches, "visibility", G_TYPE_DOUBLE,
-      instance.visibility, "covered", G_TYPE_BOOLEAN, static_cast<gboolean>(instance.covered),
-      "pickable", G_TYPE_BOOLEAN, static_cast<gboolean>(instance.pickable), "pick-order",
-      G_TYPE_INT, instance.pick_order, "grasp-x", G_TYPE_DOUBLE,
-      static_cast<double>(instance.grasp.x), "grasp-y", G_TYPE_DOUBLE,
+      "pick-instance", "model", G_TYPE_STRING, instance.model_name.c_str(), "center-x",
+      G_TYPE_DOUBLE, static_cast<double>(instance.center.x), "center-y", G_TYPE_DOUBLE,
+      static_cast<double>(instance.center.y), "angle", G_TYPE_DOUBLE, instance.angle, "scale",
+      G_TYPE_DOUBLE, instance.scale, "score", G_TYPE_DOUBLE, instance.score, "matches", G_TYPE_INT,
+      instance.matches, "visibility", G_TYPE_DOUBLE, instance.visibility, "covered", G_TYPE_BOOLEAN,
+      static_cast<gboolean>(instance.covered), "pickable", G_TYPE_BOOLEAN,
+      static_cast<gboolean>(instance.pickable), "pick-order", G_TYPE_INT, instance.pick_order,
+      "grasp-x", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.x), "grasp-y", G_TYPE_DOUBLE,
       static_cast<double>(instance.grasp.y), "grasp-angle", G_TYPE_DOUBLE, instance.grasp_angle,
       nullptr);
+  gst_structure_set(s, "view", G_TYPE_STRING, instance.view.c_str(), nullptr);
   GValue points = double_array(instance.points);
   gst_structure_take_value(s, "points", &points);
   GValue outline = double_array(instance.outline);
