@@ -68,6 +68,7 @@ GstStructure* instance_structure(const pickdetect::Instance& instance,
       "grasp-x", G_TYPE_DOUBLE, static_cast<double>(instance.grasp.x), "grasp-y", G_TYPE_DOUBLE,
       static_cast<double>(instance.grasp.y), "grasp-angle", G_TYPE_DOUBLE, instance.grasp_angle,
       nullptr);
+  gst_structure_set(s, "view", G_TYPE_STRING, instance.view.c_str(), nullptr);
   GValue points = double_array(instance.points);
   gst_structure_take_value(s, "points", &points);
   GValue outline = double_array(instance.outline);
@@ -136,6 +137,7 @@ void attach_metas(GstBuffer* buffer, const std::vector<pickdetect::Instance>& in
     std::vector<GstPickDetectPoint> outline = to_meta_points(in.outline);
     GstPickDetectInstance out{};
     out.model_name = const_cast<gchar*>(in.model_name.c_str());
+    out.view_name = const_cast<gchar*>(in.view.c_str());
     out.center_x = in.center.x;
     out.center_y = in.center.y;
     out.angle = in.angle;
@@ -266,8 +268,11 @@ GstFlowReturn detect_and_draw(GstElement* element, GstVideoFrame& frame, const F
                               const FrameConfig& config, const pickdetect::Detector& detector,
                               pickdetect::Detection& detection, double& overlay_ms) {
   try {
-    cv::Mat scratch;
-    detection = detector.detect(format.grey(frame, scratch), config.settings);
+    cv::Mat scratch, colour_scratch;
+    // The colour only tells look-alikes apart whose models have colour.
+    const cv::Mat colour =
+        detector.has_colour_models() ? format.colour(frame, colour_scratch) : cv::Mat();
+    detection = detector.detect(format.grey(frame, scratch), colour, config.settings);
   } catch (const std::exception& e) {
     GST_ELEMENT_ERROR(element, STREAM, FAILED, ("Detection failed: %s", e.what()), (nullptr));
     return GST_FLOW_ERROR;
@@ -364,6 +369,26 @@ cv::Mat FrameFormat::grey(const GstVideoFrame& frame, cv::Mat& scratch) const {
     cv::cvtColor(packed, scratch, cvt_code_);
   else
     cv::transform(packed, scratch, weights_);
+  return scratch;
+}
+
+cv::Mat FrameFormat::colour(const GstVideoFrame& frame, cv::Mat& scratch) const {
+  if (grey_source_ == GreySource::Plane)
+    return cv::Mat();
+  const int width = GST_VIDEO_FRAME_WIDTH(&frame);
+  const int height = GST_VIDEO_FRAME_HEIGHT(&frame);
+  const size_t stride = static_cast<size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0));
+  void* data = GST_VIDEO_FRAME_PLANE_DATA(&frame, 0);
+  const int channels = GST_VIDEO_FRAME_COMP_PSTRIDE(&frame, 0);
+  const cv::Mat packed(height, width, CV_8UC(channels), data, stride);
+  if (GST_VIDEO_INFO_FORMAT(&info_) == GST_VIDEO_FORMAT_BGR)
+    return packed;
+  // Components 0, 1, 2 of packed RGB formats are R, G and B, at these byte offsets.
+  const GstVideoFormatInfo* finfo = info_.finfo;
+  auto offset = [&](int c) { return static_cast<int>(GST_VIDEO_FORMAT_INFO_POFFSET(finfo, c)); };
+  const int from_to[] = {offset(2), 0, offset(1), 1, offset(0), 2};
+  scratch.create(height, width, CV_8UC3);
+  cv::mixChannels(&packed, 1, &scratch, 1, from_to, 3);
   return scratch;
 }
 

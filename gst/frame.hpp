@@ -68,6 +68,11 @@ public:
   /// A grey view of the mapped frame: the luma plane itself, or a conversion into `scratch`.
   cv::Mat grey(const GstVideoFrame& frame, cv::Mat& scratch) const;
 
+  /// The mapped frame in colour, BGR: a view of a BGR frame itself, or the channels of another
+  /// packed RGB format reordered into `scratch`. Empty for GRAY8 and YUV formats (their grey
+  /// is read in place; the colour of look-alikes is then not used).
+  cv::Mat colour(const GstVideoFrame& frame, cv::Mat& scratch) const;
+
   const Overlay& overlay() const { return overlay_; }
 
 private:

@@ -8,7 +8,8 @@
  * the frame, matched against those of all the model pictures at once, vote for where each
  * object's principal points (centre, grasping and delimiting points) lie, and mean shift gathers
  * the votes into instances; the paper's two RANSAC baselines can be chosen instead. Each instance
- * comes with its model's name, pose, principal points, outline, score, visibility, whether
+ * comes with its model's name (and, for a product with several pictures, the view it matched),
+ * pose, principal points, outline, score, visibility, whether
  * something lies on it (covered), whether it can be picked and in which order, and its grasp
  * point. The frame is worked on in place; its pixels change only with #GstPickDetect:draw.
  *
@@ -870,9 +871,10 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
   g_object_class_install_property(
       gobject_class, PROP_MODEL,
       g_param_spec_string("model", "Model",
-                          "The objects to find: model files (.yml / .yaml), plain pictures or "
-                          "model-set files (YAML with a 'models' list), several separated by "
-                          "commas; all are searched for at once. Required. Set while playing, the "
+                          "The objects to find: model files (.yml / .yaml; one may list several "
+                          "'views' of one product), plain pictures or model-set files (YAML with "
+                          "a 'models' list), several separated by commas; all are searched for "
+                          "at once. Required. Set while playing, the "
                           "new list is loaded and then used whole from the next frame on; if any "
                           "of it cannot be loaded a warning is posted and the old models stay",
                           DEFAULT_MODEL, flags));

@@ -11,6 +11,7 @@
  * duration, running_time and stream_time (nanoseconds, null when unknown), width and height
  * (pixels, from the caps), and "instances": one object per instance of the frame's
  * GstPickDetectMeta, in the meta's order, with the meta's fields under the same names: model,
+ * view (the meta's view_name: the product's view it matched, "" for a model of one picture),
  * center_x, center_y, angle, scale, score, matches, visibility, covered, pickable, pick_order,
  * grasp_x, grasp_y, grasp_angle, points and outline ([[x, y], ...], pixels), height and
  * calibrated, and, when calibrated (pickdetect's calibration property), world_x, world_y,
@@ -118,6 +119,8 @@ void add_instance(JsonBuilder* b, const GstPickDetectInstance& in) {
   json_builder_begin_object(b);
   json_builder_set_member_name(b, "model");
   json_builder_add_string_value(b, in.model_name ? in.model_name : "");
+  json_builder_set_member_name(b, "view");
+  json_builder_add_string_value(b, in.view_name ? in.view_name : "");
   add_number(b, "center_x", in.center_x);
   add_number(b, "center_y", in.center_y);
   add_number(b, "angle", in.angle);

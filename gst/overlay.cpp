@@ -228,14 +228,17 @@ void Overlay::draw(GstVideoFrame& frame, const std::vector<pickdetect::Instance>
              {centre.x + kCentreRadius + 4.0, centre.y - kCentreRadius - 4.0}, kFontScale,
              kFontThickness, green);
 
-        // The model's name, centred under the centre circle.
-        const cv::Size label = text_size(instance.model_name, kLabelFontScale, kLabelFontThickness);
+        // The model's name (and the view it matched), centred under the centre circle.
+        const std::string name = instance.view.empty()
+                                     ? instance.model_name
+                                     : instance.model_name + " (" + instance.view + ")";
+        const cv::Size label = text_size(name, kLabelFontScale, kLabelFontThickness);
         const cv::Point2d label_at(centre.x - label.width / 2.0,
                                    centre.y + kCentreRadius + 6.0 + label.height);
         if (!halo) // White letters on a dark rim, readable on light objects too.
-          text(instance.model_name, label_at, kLabelFontScale, kLabelFontThickness + 2,
+          text(name, label_at, kLabelFontScale, kLabelFontThickness + 2,
                colour(layer, Rgb{0, 0, 0}));
-        text(instance.model_name, label_at, kLabelFontScale, kLabelFontThickness, paint(kWhite));
+        text(name, label_at, kLabelFontScale, kLabelFontThickness, paint(kWhite));
 
         // The pick order, large, above left of the centre circle (the matches are above right).
         if (instance.pickable && instance.pick_order > 0) {

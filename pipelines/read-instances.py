@@ -90,7 +90,7 @@ def main():
             has_track, track_id = s.get_uint64("track-id")
             print("frame=%d pts=%s roi=%d model=%s center=(%.2f,%.2f) angle=%.2f scale=%.3f "
                   "score=%.3f matches=%d visibility=%.2f covered=%s pickable=%s pick-order=%d "
-                  "grasp=(%.2f,%.2f) bbox=%d,%d+%dx%d points=%d%s"
+                  "grasp=(%.2f,%.2f) bbox=%d,%d+%dx%d points=%d%s%s"
                   % (frame[0], Gst.TIME_ARGS(buf.pts), roi.id, GLib.quark_to_string(roi.roi_type),
                      d("center-x"), d("center-y"), d("angle"), d("scale"), d("score"),
                      i("matches"), d("visibility"),
@@ -98,7 +98,8 @@ def main():
                      "yes" if s.get_boolean("pickable")[1] else "no", i("pick-order"),
                      d("grasp-x"), d("grasp-y"), roi.x, roi.y, roi.w, roi.h,
                      len(list(s.get_value("points"))) // 2,
-                     " track=%d" % track_id if has_track else ""))
+                     " track=%d" % track_id if has_track else "",
+                     " view=%s" % s.get_string("view") if s.get_string("view") else ""))
         if lowest is not None:
             first_id[0] = lowest
         if found == 0:

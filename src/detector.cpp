@@ -90,9 +90,21 @@ Detector::Detector(std::vector<Model> models) : models_(std::move(models)) {
       Matchers{Matcher(models_, FeatureKind::Sift), Matcher(models_, FeatureKind::Orb)});
 }
 
+bool Detector::has_colour_models() const {
+  return std::any_of(models_.begin(), models_.end(),
+                     [](const Model& m) { return !m.colour.empty(); });
+}
+
 Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const {
+  return detect(grey, cv::Mat(), settings);
+}
+
+Detection Detector::detect(const cv::Mat& grey, const cv::Mat& colour,
+                           const Settings& settings) const {
   if (!grey.empty() && grey.type() != CV_8UC1)
     throw Error("frames must be 8-bit single-channel (grey) pictures");
+  if (!colour.empty() && (colour.type() != CV_8UC3 || colour.size() != grey.size()))
+    throw Error("the colour frame must be 8-bit BGR (CV_8UC3) of the grey frame's size");
   Detection result;
   if (grey.cols < kMinFrameSide || grey.rows < kMinFrameSide)
     return result;
@@ -106,18 +118,19 @@ Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const 
   const Features scene =
       extract_features_scaled(grey, settings.detection_scale, settings.features, contrast);
   const double features_ms = ms_since(t0);
-  result = detect_scene(scene, grey.size(), settings, grey);
+  result = detect_scene(scene, grey.size(), settings, grey, colour);
   result.timings.features_ms = features_ms;
   return result;
 }
 
 Detection Detector::detect(const Features& scene, const cv::Size& frame_size,
                            const Settings& settings) const {
-  return detect_scene(scene, frame_size, settings, cv::Mat());
+  return detect_scene(scene, frame_size, settings, cv::Mat(), cv::Mat());
 }
 
 Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_size,
-                                 const Settings& s, const cv::Mat& grey) const {
+                                 const Settings& s, const cv::Mat& grey,
+                                 const cv::Mat& colour) const {
   Detection result;
   result.scene_keypoints = static_cast<int>(scene.keypoints.size());
   auto t = Clock::now();
@@ -170,6 +183,7 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
         continue;
       inst.model = static_cast<int>(m);
       inst.model_name = ms.model.name;
+      inst.view = ms.model.view;
       inst.score = score_for(inst.matches);
       inst.grasp = inst.points[ms.model.grasp_point];
       inst.grasp_angle = inst.angle;
@@ -178,6 +192,10 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
   }
   if (share) {
     const int fewest = std::max(1, s.min_matches);
+    // Look-alikes that differ in colour share every feature: the frame's colour names them
+    // before they compete for the frame's keypoints.
+    if (!colour.empty())
+      detail::decide_by_colour(result.instances, models_, colour);
     detail::explain_scene(result.instances, models_, scene, s.features, fewest);
     detail::drop_look_alikes(result.instances, fewest / 2 + fewest % 2); // half, rounded up
     drop_hidden_instances(result.instances, models_, s.features);

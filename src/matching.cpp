@@ -54,6 +54,12 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
   for (size_t m = 0; m < models.size(); ++m) {
     const cv::Mat& d = models[m].features(kind).descriptors;
     offset_.push_back(static_cast<int>(owner_.size()));
+    product_.push_back(static_cast<int>(m));
+    for (size_t p = 0; p < m; ++p)
+      if (models[p].name == models[m].name) {
+        product_.back() = static_cast<int>(p);
+        break;
+      }
     owner_.insert(owner_.end(), d.rows, static_cast<int>(m));
     const auto& kps = models[m].features(kind).keypoints;
     keypoint_.insert(keypoint_.end(), kps.begin(),
@@ -226,9 +232,14 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
     if (valid < 2)
       continue;
     if (ambiguity == Ambiguity::Reject) {
+      // Another view of the same product is no rival for which product it is.
+      auto other_view = [&](int j) {
+        return owner_[idx[j]] != owner_[idx[0]] &&
+               product_[owner_[idx[j]]] == product_[owner_[idx[0]]];
+      };
       float second = dist[valid - 1];
       for (int j = 1; j < valid; ++j)
-        if (group_[idx[j]] != group_[idx[0]] && !same_place(idx[j], idx[0])) {
+        if (group_[idx[j]] != group_[idx[0]] && !same_place(idx[j], idx[0]) && !other_view(j)) {
           second = dist[j];
           break;
         }
@@ -255,8 +266,14 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
         break;
       }
     }
-    const long look_alikes =
-        std::count_if(first.begin(), first.end(), [](int j) { return j >= 0; });
+    // Look-alikes of several products (the views of one are no rivals for the product).
+    int product = -1;
+    bool several = false;
+    for (int m = 0; m < n_models; ++m)
+      if (first[m] >= 0) {
+        several = several || (product >= 0 && product_[m] != product);
+        product = product_[m];
+      }
     for (int m = 0; m < n_models; ++m) {
       if (first[m] < 0)
         continue;
@@ -264,7 +281,7 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
       const float r = second > 0.f ? d / second : 1.f;
       if (r >= ratio)
         continue;
-      push_match(matches, idx[first[m]], i, d, r, look_alikes > 1);
+      push_match(matches, idx[first[m]], i, d, r, several);
     }
   }
   return matches;

@@ -107,6 +107,22 @@ void require_model_size(const std::string& path, long cols, long rows) {
                 "-pixel side a model may have");
 }
 
+/// Whether a BGR picture has colour: at least kMinChromaShare of its pixels with channels more
+/// than kGreyChroma apart (a grey picture saved as RGB, or JPEG noise on one, has none).
+bool has_chroma(const cv::Mat& bgr) {
+  constexpr int kGreyChroma = 12;
+  constexpr double kMinChromaShare = 0.01;
+  cv::Mat hi, lo, planes[3];
+  cv::split(bgr, planes);
+  cv::max(planes[0], planes[1], hi);
+  cv::max(hi, planes[2], hi);
+  cv::min(planes[0], planes[1], lo);
+  cv::min(lo, planes[2], lo);
+  const cv::Mat chroma = hi - lo;
+  return cv::countNonZero(chroma > kGreyChroma) >=
+         kMinChromaShare * static_cast<double>(bgr.total());
+}
+
 void load_picture(Model& model) {
   require_readable(model.image_path, "model picture");
   // Refused before decoding when the header tells: a flat 30000 x 30000 PNG is small on disk
@@ -130,15 +146,19 @@ void load_picture(Model& model) {
     break;
   case 3:
     cv::cvtColor(raw, model.image, cv::COLOR_BGR2GRAY);
+    model.colour = raw;
     break;
   case 4:
     cv::cvtColor(raw, model.image, cv::COLOR_BGRA2GRAY);
+    cv::cvtColor(raw, model.colour, cv::COLOR_BGRA2BGR);
     cv::extractChannel(raw, alpha, 3);
     break;
   default:
     throw Error("model picture " + in_quotes(model.image_path) + " has " +
                 std::to_string(raw.channels()) + " channels; expected 1, 3 or 4");
   }
+  if (!model.colour.empty() && !has_chroma(model.colour))
+    model.colour.release(); // A grey picture stored as colour: nothing for the colour to tell.
   if (alpha.empty()) {
     model.mask = cv::Mat(model.image.size(), CV_8UC1, cv::Scalar(255));
   } else {
@@ -182,21 +202,20 @@ std::vector<cv::Point2f> default_outline(const Model& model) {
   return {{0.f, 0.f}, {w, 0.f}, {w, h}, {0.f, h}};
 }
 
-std::vector<cv::Point2f> read_points(const cv::FileNode& node, const std::string& path,
+std::vector<cv::Point2f> read_points(const cv::FileNode& node, const std::string& origin,
                                      const char* key) {
   std::vector<cv::Point2f> points;
   if (node.empty() || node.isNone())
     return points;
   if (!node.isSeq())
-    throw Error("model file " + in_quotes(path) + ": '" + key + "' must be a list of [x, y] pairs");
+    throw Error(origin + ": '" + key + "' must be a list of [x, y] pairs");
   for (const cv::FileNode& item : node) {
     auto number = [](const cv::FileNode& n) { return n.isReal() || n.isInt(); };
     if (!item.isSeq() || item.size() != 2 || !number(item[0]) || !number(item[1]))
-      throw Error("model file " + in_quotes(path) + ": '" + key +
-                  "' must be a list of [x, y] pairs of numbers");
+      throw Error(origin + ": '" + key + "' must be a list of [x, y] pairs of numbers");
     const double x = static_cast<double>(item[0]), y = static_cast<double>(item[1]);
     if (!std::isfinite(x) || !std::isfinite(y))
-      throw Error("model file " + in_quotes(path) + ": '" + key + "' holds a non-finite number");
+      throw Error(origin + ": '" + key + "' holds a non-finite number");
     points.emplace_back(static_cast<float>(x), static_cast<float>(y));
   }
   return points;
@@ -282,11 +301,142 @@ Model model_from_picture(const std::string& picture_path, const std::string& nam
   return model;
 }
 
-Model load_model(const std::string& path) {
+namespace {
+
+/// Reads one model (a model file's root, or one entry of its `views`) from `node`; `product`
+/// is the root, whose `height` and `max_tilt` a view takes unless it gives its own. `origin`
+/// names the file (and the view) in errors.
+Model read_model(const cv::FileNode& node, const cv::FileNode& product, const std::string& path,
+                 const std::string& origin) {
+  if (!node.isMap() || node["image"].empty())
+    throw Error(origin + ": the 'image' key (path of the model picture) is missing");
+  if (!node["image"].isString())
+    throw Error(origin + ": 'image' must be a string (path of the model picture)");
+  // Keys a view may give, else the product's.
+  auto either = [&](const char* key) { return node[key].empty() ? product[key] : node[key]; };
+
+  Model model;
+  fs::path image = static_cast<std::string>(node["image"]);
+  if (image.is_relative())
+    image = fs::path(path).parent_path() / image;
+  model.image_path = image.lexically_normal().string();
+  model.name = product["name"].isString() ? static_cast<std::string>(product["name"])
+                                          : fs::path(path).stem().string();
+  try {
+    load_picture(model);
+  } catch (const Error& e) {
+    throw Error(origin + ": " + e.what());
+  }
+  model.principal_points = read_points(node["principal_points"], origin, "principal_points");
+  if (model.principal_points.empty())
+    model.principal_points = default_principal_points(model);
+  if (!node["outline"].empty()) {
+    model.outline = read_points(node["outline"], origin, "outline");
+    if (model.outline.empty())
+      throw Error(origin + ": 'outline' is empty");
+  } else {
+    model.outline = default_outline(model);
+  }
+  if (!node["grasp_point"].empty()) {
+    if (!node["grasp_point"].isInt())
+      throw Error(origin + ": 'grasp_point' must be the index of a principal point");
+    model.grasp_point = static_cast<int>(node["grasp_point"]);
+  }
+  if (const cv::FileNode height = either("height"); !height.empty()) {
+    if (!height.isReal() && !height.isInt())
+      throw Error(origin + ": 'height' must be a number (millimetres above the work plane)");
+    model.height_mm = static_cast<double>(height);
+    if (!std::isfinite(model.height_mm) || model.height_mm < 0.0)
+      throw Error(origin + ": 'height' must be a finite number of millimetres, 0 or more");
+  }
+  // A cache written without max_tilt (before it existed) holds the picture's own features only.
+  const cv::FileNode tilt = either("max_tilt");
+  const bool tilt_given = !tilt.empty();
+  if (tilt_given) {
+    if (!tilt.isReal() && !tilt.isInt())
+      throw Error(origin + ": 'max_tilt' must be a number (degrees off the face's normal)");
+    model.max_tilt_deg = static_cast<double>(tilt);
+    if (!(model.max_tilt_deg >= 0.0 && model.max_tilt_deg <= kMaxTiltDeg))
+      throw Error(origin + ": 'max_tilt' must lie between 0 and " +
+                  std::to_string(static_cast<int>(kMaxTiltDeg)) + " degrees");
+  }
+  check_geometry(model, origin);
+
+  if (!node["keypoints"].empty() && !node["descriptors"].empty()) {
+    Features& sift = model.sift;
+    cv::read(node["keypoints"], sift.keypoints);
+    sift.descriptors = read_descriptors(node["descriptors"], sift.keypoints.size(),
+                                        kSiftDescriptorSize, origin, "descriptors");
+    if (sift.descriptors.type() != CV_32F ||
+        sift.descriptors.rows != static_cast<int>(sift.keypoints.size()) ||
+        sift.descriptors.cols != kSiftDescriptorSize)
+      throw Error(origin + ": the cached keypoints and descriptors do not agree (" +
+                  std::to_string(sift.keypoints.size()) + " keypoints, " +
+                  std::to_string(sift.descriptors.rows) + "x" +
+                  std::to_string(sift.descriptors.cols) + " descriptors)");
+    if (static_cast<int>(sift.keypoints.size()) < kMinModelKeypoints)
+      throw Error(origin + ": the cache holds only " + std::to_string(sift.keypoints.size()) +
+                  " keypoints (at least " + std::to_string(kMinModelKeypoints) + " are needed)");
+    if (!tilt_given)
+      add_tilted_views(model, sift);
+    if (!node["orb_keypoints"].empty() && !node["orb_descriptors"].empty()) {
+      cv::read(node["orb_keypoints"], model.orb.keypoints);
+      model.orb.descriptors = read_descriptors(node["orb_descriptors"], model.orb.keypoints.size(),
+                                               kOrbDescriptorSize, origin, "orb_descriptors");
+      if (model.orb.descriptors.rows != static_cast<int>(model.orb.keypoints.size()) ||
+          (!model.orb.descriptors.empty() && model.orb.descriptors.type() != CV_8U))
+        throw Error(origin + ": the cached ORB keypoints and descriptors do not agree");
+    } else {
+      model.orb = extract_features(model.image, model.mask, FeatureKind::Orb);
+    }
+  } else {
+    try {
+      compute_model_features(model);
+    } catch (const Error& e) {
+      throw Error(origin + ": " + e.what());
+    }
+  }
+  return model;
+}
+
+/// The views of a model file's `views` list, each a model of the product.
+std::vector<Model> read_views(const cv::FileNode& root, const std::string& path,
+                              const std::string& origin) {
+  const cv::FileNode list = root["views"];
+  if (!root["image"].empty())
+    throw Error(origin + ": give either 'image' (one picture) or 'views' (several), not both");
+  if (!list.isSeq() || list.size() == 0)
+    throw Error(origin + ": 'views' must be a non-empty list of views (each with its 'image')");
+  std::vector<Model> views;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const cv::FileNode item = list[static_cast<int>(i)];
+    std::string where = origin + ", views[" + std::to_string(i) + "]";
+    if (item.isMap() && item["name"].isString())
+      where += " ('" + static_cast<std::string>(item["name"]) + "')";
+    else if (item.isMap() && !item["name"].empty())
+      throw Error(where + ": a view's 'name' must be a string");
+    Model view = read_model(item, root, path, where);
+    view.view = item["name"].isString() ? static_cast<std::string>(item["name"])
+                                        : fs::path(view.image_path).stem().string();
+    if (view.view.empty())
+      throw Error(where + ": a view's 'name' must not be empty");
+    for (size_t j = 0; j < views.size(); ++j)
+      if (views[j].view == view.view)
+        throw Error(origin + ": views[" + std::to_string(j) + "] and views[" + std::to_string(i) +
+                    "] are both named '" + view.view +
+                    "'; give each view a distinct 'name' (by default its picture's file name)");
+    views.push_back(std::move(view));
+  }
+  return views;
+}
+
+} // namespace
+
+std::vector<Model> load_views(const std::string& path) {
   if (path.empty())
     throw Error("no model file given");
   if (!is_model_file(path))
-    return model_from_picture(path);
+    return {model_from_picture(path)};
 
   require_readable(path, "model file");
   const std::string origin = "model file " + in_quotes(path);
@@ -299,115 +449,31 @@ Model load_model(const std::string& path) {
   }
   try {
     const cv::FileNode root = store.root();
-    if (!root.isMap() || root["image"].empty())
-      throw Error(origin + ": the 'image' key (path of the model picture) is missing");
-    if (!root["image"].isString())
-      throw Error(origin + ": 'image' must be a string (path of the model picture)");
-
-    Model model;
-    fs::path image = static_cast<std::string>(root["image"]);
-    if (image.is_relative())
-      image = fs::path(path).parent_path() / image;
-    model.image_path = image.lexically_normal().string();
-    model.name = root["name"].isString() ? static_cast<std::string>(root["name"])
-                                         : fs::path(path).stem().string();
-    try {
-      load_picture(model);
-    } catch (const Error& e) {
-      throw Error(origin + ": " + e.what());
-    }
-    model.principal_points = read_points(root["principal_points"], path, "principal_points");
-    if (model.principal_points.empty())
-      model.principal_points = default_principal_points(model);
-    if (!root["outline"].empty()) {
-      model.outline = read_points(root["outline"], path, "outline");
-      if (model.outline.empty())
-        throw Error(origin + ": 'outline' is empty");
-    } else {
-      model.outline = default_outline(model);
-    }
-    if (!root["grasp_point"].empty()) {
-      if (!root["grasp_point"].isInt())
-        throw Error(origin + ": 'grasp_point' must be the index of a principal point");
-      model.grasp_point = static_cast<int>(root["grasp_point"]);
-    }
-    if (!root["height"].empty()) {
-      const cv::FileNode height = root["height"];
-      if (!height.isReal() && !height.isInt())
-        throw Error(origin + ": 'height' must be a number (millimetres above the work plane)");
-      model.height_mm = static_cast<double>(height);
-      if (!std::isfinite(model.height_mm) || model.height_mm < 0.0)
-        throw Error(origin + ": 'height' must be a finite number of millimetres, 0 or more");
-    }
-    // A cache written without max_tilt (before it existed) holds the picture's own features only.
-    const bool tilt_given = !root["max_tilt"].empty();
-    if (tilt_given) {
-      const cv::FileNode tilt = root["max_tilt"];
-      if (!tilt.isReal() && !tilt.isInt())
-        throw Error(origin + ": 'max_tilt' must be a number (degrees off the face's normal)");
-      model.max_tilt_deg = static_cast<double>(tilt);
-      if (!(model.max_tilt_deg >= 0.0 && model.max_tilt_deg <= kMaxTiltDeg))
-        throw Error(origin + ": 'max_tilt' must lie between 0 and " +
-                    std::to_string(static_cast<int>(kMaxTiltDeg)) + " degrees");
-    }
-    check_geometry(model, origin);
-
-    if (!root["keypoints"].empty() && !root["descriptors"].empty()) {
-      Features& sift = model.sift;
-      cv::read(root["keypoints"], sift.keypoints);
-      sift.descriptors = read_descriptors(root["descriptors"], sift.keypoints.size(),
-                                          kSiftDescriptorSize, origin, "descriptors");
-      if (sift.descriptors.type() != CV_32F ||
-          sift.descriptors.rows != static_cast<int>(sift.keypoints.size()) ||
-          sift.descriptors.cols != kSiftDescriptorSize)
-        throw Error(origin + ": the cached keypoints and descriptors do not agree (" +
-                    std::to_string(sift.keypoints.size()) + " keypoints, " +
-                    std::to_string(sift.descriptors.rows) + "x" +
-                    std::to_string(sift.descriptors.cols) + " descriptors)");
-      if (static_cast<int>(sift.keypoints.size()) < kMinModelKeypoints)
-        throw Error(origin + ": the cache holds only " + std::to_string(sift.keypoints.size()) +
-                    " keypoints (at least " + std::to_string(kMinModelKeypoints) + " are needed)");
-      if (!tilt_given)
-        add_tilted_views(model, sift);
-      if (!root["orb_keypoints"].empty() && !root["orb_descriptors"].empty()) {
-        cv::read(root["orb_keypoints"], model.orb.keypoints);
-        model.orb.descriptors =
-            read_descriptors(root["orb_descriptors"], model.orb.keypoints.size(),
-                             kOrbDescriptorSize, origin, "orb_descriptors");
-        if (model.orb.descriptors.rows != static_cast<int>(model.orb.keypoints.size()) ||
-            (!model.orb.descriptors.empty() && model.orb.descriptors.type() != CV_8U))
-          throw Error(origin + ": the cached ORB keypoints and descriptors do not agree");
-      } else {
-        model.orb = extract_features(model.image, model.mask, FeatureKind::Orb);
-      }
-    } else {
-      try {
-        compute_model_features(model);
-      } catch (const Error& e) {
-        throw Error(origin + ": " + e.what());
-      }
-    }
-    return model;
+    if (root.isMap() && !root["views"].empty())
+      return read_views(root, path, origin);
+    return {read_model(root, root, path, origin)};
   } catch (const cv::Exception& e) {
     throw Error(origin + " is not a valid model file: " + e.err);
   }
 }
 
-void save_model(const Model& model, const std::string& path, bool cache_features) {
-  cv::FileStorage store;
-  try {
-    store.open(path, cv::FileStorage::WRITE);
-  } catch (const cv::Exception& e) {
-    throw Error("model file " + in_quotes(path) + " cannot be written: " + e.err);
-  }
-  if (!store.isOpened())
-    throw Error("model file " + in_quotes(path) + " cannot be written");
+Model load_model(const std::string& path) {
+  std::vector<Model> views = load_views(path);
+  if (views.size() != 1)
+    throw Error("model file " + in_quotes(path) + " lists " + std::to_string(views.size()) +
+                " views of '" + views.front().name + "'; load it as a model list (load_models)");
+  return std::move(views.front());
+}
 
-  const fs::path folder = fs::absolute(path).parent_path();
+namespace {
+
+/// Writes one model's picture, points and (with cache_features) features as keys of the open
+/// map of `store`; `folder` is the model file's.
+void write_model(cv::FileStorage& store, const Model& model, const fs::path& folder,
+                 bool cache_features) {
   const fs::path image = fs::absolute(model.image_path);
   const fs::path relative = image.lexically_relative(folder);
   const bool below = !relative.empty() && *relative.begin() != "..";
-  store << "name" << model.name;
   store << "image" << (below ? relative.string() : image.string());
   auto write_points = [&](const char* key, const std::vector<cv::Point2f>& points) {
     store << key << "[";
@@ -418,15 +484,60 @@ void save_model(const Model& model, const std::string& path, bool cache_features
   write_points("principal_points", model.principal_points);
   write_points("outline", model.outline);
   store << "grasp_point" << model.grasp_point;
-  if (model.height_mm > 0.0)
-    store << "height" << model.height_mm;
-  store << "max_tilt" << model.max_tilt_deg;
   if (cache_features && !model.sift.keypoints.empty()) {
     cv::write(store, "keypoints", model.sift.keypoints);
     store << "descriptors" << model.sift.descriptors;
     cv::write(store, "orb_keypoints", model.orb.keypoints);
     store << "orb_descriptors" << model.orb.descriptors;
   }
+}
+
+void open_for_writing(cv::FileStorage& store, const std::string& path) {
+  try {
+    store.open(path, cv::FileStorage::WRITE);
+  } catch (const cv::Exception& e) {
+    throw Error("model file " + in_quotes(path) + " cannot be written: " + e.err);
+  }
+  if (!store.isOpened())
+    throw Error("model file " + in_quotes(path) + " cannot be written");
+}
+
+} // namespace
+
+void save_model(const Model& model, const std::string& path, bool cache_features) {
+  cv::FileStorage store;
+  open_for_writing(store, path);
+  store << "name" << model.name;
+  if (model.height_mm > 0.0)
+    store << "height" << model.height_mm;
+  store << "max_tilt" << model.max_tilt_deg;
+  write_model(store, model, fs::absolute(path).parent_path(), cache_features);
+}
+
+void save_views(const std::vector<Model>& views, const std::string& path, bool cache_features) {
+  if (views.empty())
+    throw Error("model file " + in_quotes(path) + ": no views to write");
+  for (const Model& view : views)
+    if (view.name != views.front().name)
+      throw Error("model file " + in_quotes(path) + ": the views name two products, '" +
+                  views.front().name + "' and '" + view.name + "'");
+  cv::FileStorage store;
+  open_for_writing(store, path);
+  const Model& first = views.front();
+  store << "name" << first.name;
+  if (first.height_mm > 0.0)
+    store << "height" << first.height_mm;
+  store << "max_tilt" << first.max_tilt_deg;
+  store << "views"
+        << "[";
+  const fs::path folder = fs::absolute(path).parent_path();
+  for (const Model& view : views) {
+    store << "{";
+    store << "name" << (view.view.empty() ? fs::path(view.image_path).stem().string() : view.view);
+    write_model(store, view, folder, cache_features);
+    store << "}";
+  }
+  store << "]";
 }
 
 } // namespace pickdetect

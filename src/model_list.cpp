@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Model lists: comma-separated model files, pictures and model-set files, loaded as one list of
-// models with distinct names (what the element's `model` property and the tools take).
+// models with distinct names, one per view of each product (what the element's `model`
+// property and the tools take).
 #include <pickdetect/error.hpp>
 #include <pickdetect/model.hpp>
 
@@ -9,6 +10,7 @@
 #include <exception>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -91,8 +93,10 @@ void load_entry(const std::string& entry, std::vector<Model>& models,
       if (file != entry && read_model_set(file, nested))
         throw Error("model set \"" + entry + "\" lists another model set, \"" + file +
                     "\"; list that set's models instead");
-      models.push_back(load_model(file));
-      sources.push_back(file);
+      for (Model& view : load_views(file)) {
+        models.push_back(std::move(view));
+        sources.push_back(file);
+      }
     }
   } catch (const std::exception& e) {
     throw Error(e.what(), file_error_kind(path), path);
@@ -112,10 +116,12 @@ std::vector<Model> load_models(const std::string& list) {
     load_entry(entry, models, sources);
   }
   // Instances are told apart by their model's name only; the same model twice would also make
-  // every one of its features ambiguous, so that none would match.
+  // every one of its features ambiguous, so that none would match. The views of one product
+  // (one model file) share its name, and their names differ (load_views).
   for (size_t i = 0; i < models.size(); i++)
     for (size_t j = 0; j < i; j++)
-      if (models[i].name == models[j].name)
+      if (models[i].name == models[j].name &&
+          (sources[i] != sources[j] || models[i].view == models[j].view))
         throw Error("two models are named \"" + models[i].name + "\" (" + sources[j] + " and " +
                     sources[i] + "); give each model a distinct name (the `name` key of a model " +
                     "file)");

@@ -53,8 +53,9 @@ struct Settings {
 
 /// One object instance found in the frame, in scene pixels (y axis down).
 struct Instance {
-  int model = 0; ///< Index of the model in the detector's list.
-  std::string model_name;
+  int model = 0;          ///< Index of the model in the detector's list.
+  std::string model_name; ///< The product's name (Model::name).
+  std::string view;       ///< Which of the product's views it matched (Model::view; may be empty).
   std::vector<cv::Point2f> points;  ///< The model's principal points; [0] is the centre.
   std::vector<cv::Point2f> outline; ///< The model's outline carried into the scene.
   cv::Point2f center;
@@ -93,7 +94,8 @@ struct Detection {
   int matches = 0;
 };
 
-/// Finds every instance of its models in grey frames. Immutable after construction, so one
+/// Finds every instance of its models in grey frames (and tells apart by the frame's colour,
+/// when given, look-alike products that differ in colour). Immutable after construction, so one
 /// detector may serve several threads; swapping models means building a new detector.
 class PICKDETECT_API Detector {
 public:
@@ -101,6 +103,17 @@ public:
 
   /// Detects in a grey frame (CV_8UC1, any stride; the data is only read).
   Detection detect(const cv::Mat& grey, const Settings& settings = Settings()) const;
+
+  /// Detects in a grey frame, with the same frame in colour beside it (`colour`: CV_8UC3, BGR,
+  /// the grey one's size; empty: none). Features come from the grey frame as above; the colour
+  /// tells look-alike products that differ only in colour apart, where their models have
+  /// colour (Model::colour) and the method is voting with refinement (docs/models.md). Without
+  /// colour, or with grey models, the result is detect(grey, settings)'s.
+  Detection detect(const cv::Mat& grey, const cv::Mat& colour,
+                   const Settings& settings = Settings()) const;
+
+  /// Whether any model has colour: only then is a colour frame worth giving.
+  bool has_colour_models() const;
 
   /// Detects from features already extracted from the frame. Without the frame's pixels,
   /// which of two overlapping instances is on top is told from the features alone.
@@ -111,7 +124,8 @@ public:
 
 private:
   Detection detect_scene(const Features& scene, const cv::Size& frame_size,
-                         const Settings& settings, const cv::Mat& grey) const;
+                         const Settings& settings, const cv::Mat& grey,
+                         const cv::Mat& colour) const;
 
   struct Matchers; ///< The search indices over the models' features (src/, internal).
 

@@ -19,12 +19,14 @@ namespace pickdetect {
 /// (look-alike products share parts of their design).
 enum class Ambiguity {
   /// The two nearest neighbours are searched over all models together: such a feature fails
-  /// the ratio test and decides for none (the paper's matching).
+  /// the ratio test and decides for none (the paper's matching). The views of one product
+  /// (models of one name) are no rivals: the second neighbour is searched beyond them.
   Reject,
   /// The models whose nearest descriptor fits nearly as well as the best of all are the
   /// feature's look-alikes. Each of their nearest is tested against the nearest descriptor
-  /// that is none of theirs, and each that passes gets a match, marked `shared` when there
-  /// are several look-alikes. Which product the object is must then be decided from the
+  /// that is none of theirs, and each that passes gets a match, marked `shared` when the
+  /// look-alikes are of several products (views of one product, models of one name, are no
+  /// rivals for which product it is). Which product the object is must then be decided from the
   /// instances. Without look-alikes this is the same test as Reject.
   Share,
 };
@@ -73,6 +75,9 @@ private:
   /// Whether two rows (of one model) lie at one place of the picture: views of one keypoint.
   bool same_place(int a, int b) const;
   std::vector<int> offset_; ///< Model index -> first row.
+  /// Model index -> its product (the first model of its name): a feature that fits only views
+  /// of one product is no look-alike's, and its matches are not `shared`.
+  std::vector<int> product_;
   std::shared_ptr<cv::flann::Index> index_;
   std::vector<int> group_;               ///< Row -> its repeat group (itself when unrepeated).
   std::vector<std::vector<int>> copies_; ///< Row -> the rows of its group (empty: none).

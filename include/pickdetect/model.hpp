@@ -21,10 +21,19 @@ constexpr double kDefaultMaxTiltDeg = 60.0;
 constexpr double kMaxTiltDeg = 80.0;
 
 struct Model {
-  std::string name;       ///< Shown as the instance's model name (ROI type, overlay label).
+  /// The product's name, shown as the instance's model name (ROI type, overlay label). The views
+  /// of one product (a model file's `views`) are models of one name.
+  std::string name;
+  /// Which picture of the product this is: a view's name (its `name` key, else its picture's
+  /// file name without extension) for a model file with `views`; empty for a product of one
+  /// picture.
+  std::string view;
   std::string image_path; ///< The model picture the features come from.
   cv::Mat image;          ///< Grey picture, CV_8UC1.
-  cv::Mat mask;           ///< CV_8UC1, 255 where the picture shows the object.
+  /// The picture in colour (CV_8UC3, BGR), for telling look-alike products apart by the frame's
+  /// colour; empty when the picture is grey (one channel, or no pixel with chroma).
+  cv::Mat colour;
+  cv::Mat mask; ///< CV_8UC1, 255 where the picture shows the object.
   /// Principal points in model pixels; [0] is the object centre, the rest grasping / delimiting
   /// points.
   std::vector<cv::Point2f> principal_points;
@@ -53,14 +62,26 @@ constexpr int kMinModelKeypoints = 12;
 PICKDETECT_API Model model_from_picture(const std::string& picture_path,
                                         const std::string& name = {});
 
-/// Loads a model file (YAML, see README) or, for any other file, a plain picture with default
-/// points. Throws Error naming the file and the reason.
+/// Loads a model file (YAML, see docs/models.md) or, for any other file, a plain picture with
+/// default points. Throws Error naming the file and the reason; also for a model file listing
+/// several `views` (load_views takes those).
 PICKDETECT_API Model load_model(const std::string& path);
+
+/// Loads every view of a product: one model per entry of a model file's `views` list (each with
+/// the product's name and its own Model::view), or the one model of any other model file or
+/// picture. Throws Error naming the file, the view and the reason.
+PICKDETECT_API std::vector<Model> load_views(const std::string& path);
 
 /// Writes a model file. The picture path is stored relative to the file's folder when it lies
 /// below it. With cache_features the keypoints and descriptors are stored too, so that loading
 /// does not recompute them.
 PICKDETECT_API void save_model(const Model& model, const std::string& path,
+                               bool cache_features = true);
+
+/// Writes a model file listing the views of one product (models of one name, each with its own
+/// Model::view; `height` and `max_tilt` are those of the first), which load_views reads back.
+/// Throws Error when `views` is empty or its models name different products.
+PICKDETECT_API void save_views(const std::vector<Model>& views, const std::string& path,
                                bool cache_features = true);
 
 /// Computes the model's SIFT and ORB features from its picture and mask (used by the loaders).
@@ -74,8 +95,8 @@ PICKDETECT_API bool is_model_file(const std::string& path);
 /// file with a `models` list of model files or pictures and no `image`; relative entries are
 /// relative to the set's folder), separated by commas, blanks around each entry ignored. Throws
 /// Error when any cannot be loaded (its path() the file being read and its kind() why), when an
-/// entry is empty, when a set lists another set, or when two models share a name (path() empty
-/// for the list as a whole).
+/// entry is empty, when a set lists another set, or when two entries name the same product
+/// (path() empty for the list as a whole). A model file with `views` gives one model per view.
 PICKDETECT_API std::vector<Model> load_models(const std::string& list);
 
 } // namespace pickdetect

@@ -116,3 +116,23 @@ TEST(LookAlikes, OverlappingProductsAndTwoOfOneProductStay) {
   detail::drop_look_alikes(found, 3);
   EXPECT_EQ(found.size(), 2u);
 }
+
+TEST(LookAlikes, TwoViewsOfOneProductInOnePlaceAreNoRivals) {
+  // Models 0 and 1 are views of one product ("carton"): their shared design names the product
+  // though neither has distinct matches; the view with more matches is the one seen.
+  auto view = [](Instance inst) {
+    inst.model_name = "carton";
+    inst.distinct_matches = 0;
+    return inst;
+  };
+  std::vector<Instance> found = {view(placed(0, square(100, 100, 200), spread(120, 120, 30))),
+                                 view(placed(1, square(101, 99, 200), spread(120, 120, 40)))};
+  detail::drop_look_alikes(found, 0);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].model, 1);
+  // Models of two products in the same state name neither.
+  found = {with_distinct(placed(0, square(100, 100, 200), spread(120, 120, 30)), 0),
+           with_distinct(placed(1, square(101, 99, 200), spread(120, 120, 40)), 0)};
+  detail::drop_look_alikes(found, 0);
+  EXPECT_TRUE(found.empty());
+}

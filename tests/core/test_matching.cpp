@@ -29,6 +29,23 @@ TEST(Matcher, AFeatureThatFitsTwoModelsEquallyDecidesForNeither) {
   EXPECT_TRUE(Matcher({a, twin}).match(scene.descriptors, 0.8).empty());
 }
 
+TEST(Matcher, ViewsOfOneProductAreNoRivals) {
+  // Two views of one product that look alike (here the same picture): a feature of both names
+  // the product, so it is neither rejected nor marked shared.
+  const Model a = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  Model back = a;
+  back.view = "back";
+  const cv::Mat scene = a.sift.descriptors;
+  const size_t alone = Matcher({a}).match(scene, 0.8, Search::BruteForce).size();
+  EXPECT_GT(alone, a.sift.keypoints.size() / 2);
+  EXPECT_EQ(Matcher({a, back}).match(scene, 0.8, Search::BruteForce).size(), alone);
+  const std::vector<Match> shared =
+      Matcher({a, back}).match(scene, 0.8, Search::BruteForce, Ambiguity::Share);
+  EXPECT_GE(shared.size(), alone);
+  for (const Match& m : shared)
+    EXPECT_FALSE(m.shared);
+}
+
 TEST(Matcher, SharingGivesAFeatureToEveryLookAlike) {
   const Model a = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
   Model twin = a;

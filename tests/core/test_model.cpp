@@ -1,5 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Models: pictures, alpha outlines, default principal points, model files and their errors.
+#include "../support/folder_test.hpp"
+
 #include <pickdetect/pickdetect.hpp>
 
 #include <gtest/gtest.h>
@@ -17,20 +19,9 @@ namespace {
 const std::string kData = PICKDETECT_TEST_DATA;
 
 /// A fresh folder per test, removed afterwards.
-class ModelFiles : public ::testing::Test {
+class ModelFiles : public test_scene::FolderTest {
 protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("pickdetect-model-" + std::to_string(::getpid()) + "-" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-    return path(name);
-  }
+  ModelFiles() : FolderTest("pickdetect-model-") {}
   /// Expects load_model to throw an Error whose message contains every fragment.
   static void expect_refused(const std::string& file,
                              std::initializer_list<std::string> fragments) {
@@ -43,7 +34,6 @@ protected:
             << "message '" << e.what() << "' should mention '" << f << "'";
     }
   }
-  fs::path dir_;
 };
 
 } // namespace

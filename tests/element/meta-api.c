@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
   instance.n_world_outline = 4;
   instance.world_outline = world_outline;
   instance.height = 35.0;
+  instance.view_name = "front";
   const GstPickDetectInstance* added = gst_pickdetect_meta_add_instance(meta, &instance);
   CHECK(added != NULL && added->points != points && added->model_name != instance.model_name);
   CHECK(added->world_outline != world_outline && added->world_outline[1].x == 50.0);
@@ -70,6 +71,7 @@ int main(int argc, char** argv) {
   CHECK(gst_pickdetect_meta_get_instance(meta, 1) == NULL);
   const GstPickDetectInstance* got = gst_pickdetect_meta_get_instance(meta, 0);
   CHECK(strcmp(got->model_name, "box") == 0);
+  CHECK(got->view_name != instance.view_name && strcmp(got->view_name, "front") == 0);
   CHECK(got->points[0].x == 100.0 && got->n_outline == 4 && got->matches == 42);
   CHECK(got->visibility == 0.75 && got->covered && !got->pickable && got->pick_order == 0);
 
@@ -90,6 +92,8 @@ int main(int argc, char** argv) {
   CHECK(copied->instances[0].outline[2].x == 130.0);
   CHECK(copied->instances[0].covered && !copied->instances[0].pickable);
   CHECK(copied->instances[0].world_outline != got->world_outline);
+  CHECK(copied->instances[0].view_name != got->view_name &&
+        strcmp(copied->instances[0].view_name, "front") == 0);
   CHECK(copied->instances[0].n_world_outline == 4 &&
         copied->instances[0].world_outline[1].x == 50.0);
 

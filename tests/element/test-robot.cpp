@@ -294,6 +294,7 @@ GST_START_TEST(test_json_lines_match_the_metas) {
     const GstPickDetectInstance& in = meta->instances[i];
     JsonObject* o = json_array_get_object_element(instances, i);
     fail_unless_equals_string(json_object_get_string_member(o, "model"), in.model_name);
+    fail_unless_equals_string(json_object_get_string_member(o, "view"), in.view_name);
     check_number(o, "center_x", in.center_x);
     check_number(o, "center_y", in.center_y);
     check_number(o, "angle", in.angle);

@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <iterator>
 #include <memory>
@@ -50,8 +51,14 @@ void print_json(const char* picture, const std::vector<pickdetect::Instance>& in
   for (size_t i = 0; i < instances.size(); ++i) {
     const pickdetect::Instance& inst = instances[i];
     gchar* model = g_strescape(inst.model_name.c_str(), nullptr);
-    std::printf("%s{\"model\": \"%s\", \"points\": ", i ? ", " : "", model);
+    std::printf("%s{\"model\": \"%s\", ", i ? ", " : "", model);
     g_free(model);
+    if (!inst.view.empty()) {
+      gchar* view = g_strescape(inst.view.c_str(), nullptr);
+      std::printf("\"view\": \"%s\", ", view);
+      g_free(view);
+    }
+    std::printf("\"points\": ");
     print_points(inst.points);
     std::printf(", \"polygon\": ");
     print_points(inst.outline);
@@ -107,7 +114,7 @@ int main(int argc, char** argv) {
       {"annotate", 'o', 0, G_OPTION_ARG_FILENAME, &annotate,
        "Write the (last) picture with the instances drawn on it", "FILE"},
       {"save-model", 0, 0, G_OPTION_ARG_FILENAME, &save,
-       "Write the (first) model as a model file with its features cached", "FILE"},
+       "Write the (first) model, all its views, as a model file with its features cached", "FILE"},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
 
   pickdetect::tools::OptionHelp help;
@@ -151,8 +158,14 @@ int main(int argc, char** argv) {
       std::vector<pickdetect::Model> listed = pickdetect::load_models(*m);
       std::move(listed.begin(), listed.end(), std::back_inserter(loaded));
     }
-    if (save)
+    if (save && loaded.front().view.empty()) {
       pickdetect::save_model(loaded.front(), save, true);
+    } else if (save) { // Every view of the first product.
+      std::vector<pickdetect::Model> views;
+      std::copy_if(loaded.begin(), loaded.end(), std::back_inserter(views),
+                   [&](const pickdetect::Model& m) { return m.name == loaded.front().name; });
+      pickdetect::save_views(views, save, true);
+    }
     const pickdetect::Detector detector(std::move(loaded));
 
     for (int a = 1; a < argc; ++a) {
@@ -161,7 +174,8 @@ int main(int argc, char** argv) {
         throw pickdetect::Error(std::string("picture '") + argv[a] + "' cannot be read");
       cv::Mat grey;
       cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);
-      const pickdetect::Detection d = detector.detect(grey, s);
+      // The colour tells look-alike products that differ in colour apart.
+      const pickdetect::Detection d = detector.detect(grey, bgr, s);
       if (json) {
         print_json(argv[a], d.instances);
         continue;
@@ -173,10 +187,11 @@ int main(int argc, char** argv) {
                   pickdetect::method_name(s.method), d.timings.features_ms, d.timings.matching_ms,
                   d.timings.clustering_ms);
       for (const pickdetect::Instance& inst : d.instances) {
-        std::printf("  %s centre=(%.1f, %.1f) angle=%.1f scale=%.3f matches=%d score=%.2f "
+        std::printf("  %s%s%s centre=(%.1f, %.1f) angle=%.1f scale=%.3f matches=%d score=%.2f "
                     "pickable=%s points=",
-                    inst.model_name.c_str(), inst.center.x, inst.center.y, inst.angle, inst.scale,
-                    inst.matches, inst.score, inst.pickable ? "yes" : "no");
+                    inst.model_name.c_str(), inst.view.empty() ? "" : " view=", inst.view.c_str(),
+                    inst.center.x, inst.center.y, inst.angle, inst.scale, inst.matches, inst.score,
+                    inst.pickable ? "yes" : "no");
         for (size_t j = 0; j < inst.points.size(); ++j)
           std::printf("%s(%.1f, %.1f)", j ? " " : "", inst.points[j].x, inst.points[j].y);
         std::printf("\n");

@@ -24,6 +24,7 @@
 
 static void instance_clear(GstPickDetectInstance* instance) {
   g_free(instance->model_name);
+  g_free(instance->view_name);
   g_free(instance->points);
   g_free(instance->outline);
   g_free(instance->world_outline);
@@ -33,6 +34,7 @@ static void instance_clear(GstPickDetectInstance* instance) {
 static void instance_copy(GstPickDetectInstance* dest, const GstPickDetectInstance* src) {
   *dest = *src;
   dest->model_name = g_strdup(src->model_name ? src->model_name : "");
+  dest->view_name = g_strdup(src->view_name ? src->view_name : "");
   dest->points =
       src->n_points ? g_memdup2(src->points, sizeof(GstPickDetectPoint) * src->n_points) : NULL;
   dest->outline =

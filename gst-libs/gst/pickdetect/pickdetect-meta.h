@@ -87,11 +87,14 @@ typedef struct {
  * @world_velocity_x: with tracking and a calibration (@calibrated), the motion on the work
  *   plane in millimetres per second, x; 0 otherwise
  * @world_velocity_y: the same, y
+ * @view_name: which view of the product it matched: the view's name, for a model file that lists
+ *   several pictures of one product (`views`, docs/models.md); "" for a model of one picture
+ *   (never %NULL in a meta; @model_name is the product's name). Since: 0.1
  *
- * One object instance. Inside a meta every array belongs to the meta. The world fields (on the
- * work plane, in millimetres, lens distortion and the model's height accounted for) come after
- * the pixel ones, so that code built against the earlier struct reads the same fields. Plane
- * positions do not change when the frame is scaled.
+ * One object instance. Inside a meta every array and string belongs to the meta. The world
+ * fields (on the work plane, in millimetres, lens distortion and the model's height accounted
+ * for) come after the pixel ones, and @view_name last, so that code built against the earlier
+ * struct reads the same fields. Plane positions do not change when the frame is scaled.
  *
  * Since: 0.1
  */
@@ -131,6 +134,7 @@ typedef struct {
   gboolean tracked;
   gdouble world_velocity_x;
   gdouble world_velocity_y;
+  gchar* view_name;
 } GstPickDetectInstance;
 
 typedef struct _GstPickDetectMeta GstPickDetectMeta;
