@@ -53,6 +53,15 @@ bool finite_instance(const Instance& inst) {
 
 } // namespace
 
+double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings) {
+  // By default SIFT's contrast threshold follows the frame's exposure: a dim frame keeps its
+  // weaker extrema. ORB has no use for it.
+  return settings.contrast_threshold > 0.0 ? settings.contrast_threshold
+         : settings.features == FeatureKind::Sift
+             ? kSiftContrastThreshold * exposure_contrast_share(grey)
+             : kSiftContrastThreshold;
+}
+
 const char* method_name(Method method) {
   switch (method) {
   case Method::Voting:
@@ -97,14 +106,8 @@ Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const 
   if (grey.cols < kMinFrameSide || grey.rows < kMinFrameSide)
     return result;
   const auto t0 = Clock::now();
-  // By default SIFT's contrast threshold follows the frame's exposure: a dim frame keeps its
-  // weaker extrema. ORB has no use for it.
-  const double contrast = settings.contrast_threshold > 0.0 ? settings.contrast_threshold
-                          : settings.features == FeatureKind::Sift
-                              ? kSiftContrastThreshold * exposure_contrast_share(grey)
-                              : kSiftContrastThreshold;
-  const Features scene =
-      extract_features_scaled(grey, settings.detection_scale, settings.features, contrast);
+  const Features scene = extract_features_scaled(grey, settings.detection_scale, settings.features,
+                                                 frame_contrast_threshold(grey, settings));
   const double features_ms = ms_since(t0);
   result = detect_scene(scene, grey.size(), settings, grey);
   result.timings.features_ms = features_ms;
@@ -116,23 +119,40 @@ Detection Detector::detect(const Features& scene, const cv::Size& frame_size,
   return detect_scene(scene, frame_size, settings, cv::Mat());
 }
 
-Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_size,
-                                 const Settings& s, const cv::Mat& grey) const {
-  Detection result;
-  result.scene_keypoints = static_cast<int>(scene.keypoints.size());
-  auto t = Clock::now();
+std::vector<Match> Detector::match(const Features& scene, const Settings& s) const {
   // The voting method with refinement shares a feature between look-alike models and decides
   // which product an object is from each instance's own evidence (drop_look_alikes); the
   // baselines and the paper's plain voting reject such features, as the paper does.
   const bool share = s.method == Method::Voting && s.refine;
-  const std::vector<Match> matches =
-      (s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift)
-          .match(scene.descriptors, s.ratio, s.search,
-                 share ? Ambiguity::Share : Ambiguity::Reject);
-  result.matches = static_cast<int>(matches.size());
-  result.timings.matching_ms = ms_since(t);
+  return (s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift)
+      .match(scene.descriptors, s.ratio, s.search, share ? Ambiguity::Share : Ambiguity::Reject);
+}
 
-  t = Clock::now();
+Detection Detector::detect(const cv::Mat& grey, const Features& scene,
+                           const std::vector<Match>& matches, const Settings& settings) const {
+  if (!grey.empty() && grey.type() != CV_8UC1)
+    throw Error("frames must be 8-bit single-channel (grey) pictures");
+  return detect_matched(scene, matches, grey.size(), settings, grey);
+}
+
+Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_size,
+                                 const Settings& s, const cv::Mat& grey) const {
+  const auto t = Clock::now();
+  const std::vector<Match> matches = match(scene, s);
+  const double matching_ms = ms_since(t);
+  Detection result = detect_matched(scene, matches, frame_size, s, grey);
+  result.timings.matching_ms = matching_ms;
+  return result;
+}
+
+Detection Detector::detect_matched(const Features& scene, const std::vector<Match>& matches,
+                                   const cv::Size& frame_size, const Settings& s,
+                                   const cv::Mat& grey) const {
+  Detection result;
+  result.scene_keypoints = static_cast<int>(scene.keypoints.size());
+  result.matches = static_cast<int>(matches.size());
+  const bool share = s.method == Method::Voting && s.refine;
+  const auto t = Clock::now();
   for (size_t m = 0; m < models_.size(); ++m) {
     detail::ModelScene ms{models_[m],
                           models_[m].features(s.features).keypoints,
