@@ -109,6 +109,8 @@ struct Moved {
   const Instance* instance = nullptr;
   cv::Point2f shift;
   cv::Rect before, after; ///< Its outline's box in the last frame and in this one.
+  /// How far it moved since the whole frame, when it was followed from there.
+  std::optional<cv::Point2f> since_whole;
 };
 
 /// ECC over the instance's own pixels (its outline, the belt under it left out) must agree this
@@ -122,6 +124,8 @@ constexpr int kPredictedMargin = 8;
 /// A moved instance is this frame's instance of its model whose centre lies nearest where it
 /// moved to, within this share of the box's diagonal.
 constexpr double kSameInstanceShare = 0.1;
+/// Keypoints this close outside an instance's outline (pixels) ride with it.
+constexpr double kOutlineSlack = 4.0;
 /// An instance is followed by its motion while this share of its box is in the frame.
 constexpr double kLeastInFrame = 0.3;
 
@@ -129,51 +133,62 @@ cv::Rect box_of(const std::vector<cv::Point2f>& outline) {
   return cv::boundingRect(outline);
 }
 
-/// How `instance` moved from `last` to `grey`: ECC on its outline's pixels for the sub-pixel
-/// shift, started from `predicted` (its last step), else (or when that fails) from the phase
-/// correlation of its box (the part in the frame). False when less than kLeastInFrame of its
-/// box is in the frame, or the pictures do not agree.
-bool measure_shift(const cv::Mat& last, const cv::Mat& grey, const Instance& instance,
-                   const std::optional<cv::Point2f>& predicted, cv::Point2f& shift) {
-  const cv::Rect frame(cv::Point(0, 0), grey.size());
-  const cv::Rect whole = box_of(instance.outline);
-  const cv::Rect box = whole & frame;
-  if (box.width < 16 || box.height < 16 || box.area() < kLeastInFrame * whole.area())
+/// The shift of the pixels inside `outline` (in `from`'s pixels) from `from` to `to`, by ECC
+/// started at `guess`, on windows of both pictures `margin` pixels around the outline's box
+/// (the same size, as ECC wants; the whole-pixel part of the guess between them). False when
+/// the pictures do not agree.
+bool ecc_shift(const cv::Mat& from, const cv::Mat& to, const std::vector<cv::Point2f>& outline,
+               const cv::Point2f& guess, int margin, cv::Point2f& shift) {
+  const cv::Rect frame(cv::Point(0, 0), to.size());
+  const cv::Point offset(cvRound(guess.x), cvRound(guess.y));
+  const cv::Rect box = box_of(outline);
+  const cv::Rect window =
+      cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin) &
+      frame & (frame - offset);
+  if (window.width < 16 || window.height < 16)
     return false;
-  auto ecc = [&](const cv::Point2f& start, int margin) {
-    // Template and picture of the same size (as ECC wants): a window of both frames around the
-    // box, the template's pixels those of the instance's outline.
-    const cv::Rect search =
-        cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin) &
-        frame;
-    cv::Mat mask = cv::Mat::zeros(search.size(), CV_8UC1);
-    std::vector<cv::Point> inside;
-    for (const cv::Point2f& p : instance.outline)
-      inside.emplace_back(cvRound(p.x - search.x), cvRound(p.y - search.y));
-    cv::fillConvexPoly(mask, inside, cv::Scalar(255));
-    cv::erode(mask, mask, cv::Mat(), cv::Point(-1, -1), 2);
-    cv::Mat warp = (cv::Mat_<float>(2, 3) << 1, 0, start.x, 0, 1, start.y);
-    try {
-      const double cc = cv::findTransformECC(
-          last(search), grey(search), warp, cv::MOTION_TRANSLATION,
-          cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-4), mask, 1);
-      shift = cv::Point2f(warp.at<float>(0, 2), warp.at<float>(1, 2));
-      return cc >= kLeastCorrelation;
-    } catch (const cv::Exception&) {
-      return false; // ECC did not converge.
-    }
-  };
-  if (predicted && ecc(*predicted, static_cast<int>(std::ceil(
-                                       std::max(std::abs(predicted->x), std::abs(predicted->y)))) +
-                                       kPredictedMargin))
+  cv::Mat mask = cv::Mat::zeros(window.size(), CV_8UC1);
+  std::vector<cv::Point> inside;
+  for (const cv::Point2f& p : outline)
+    inside.emplace_back(cvRound(p.x - window.x), cvRound(p.y - window.y));
+  cv::fillConvexPoly(mask, inside, cv::Scalar(255));
+  cv::erode(mask, mask, cv::Mat(), cv::Point(-1, -1), 2);
+  cv::Mat warp = (cv::Mat_<float>(2, 3) << 1, 0, guess.x - offset.x, 0, 1, guess.y - offset.y);
+  try {
+    const double cc = cv::findTransformECC(
+        from(window), to(window + offset), warp, cv::MOTION_TRANSLATION,
+        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-4), mask, 1);
+    shift = cv::Point2f(static_cast<float>(offset.x) + warp.at<float>(0, 2),
+                        static_cast<float>(offset.y) + warp.at<float>(1, 2));
+    return cc >= kLeastCorrelation;
+  } catch (const cv::Exception&) {
+    return false; // ECC did not converge.
+  }
+}
+
+/// Whether enough of the instance is in the frame to follow it by its motion.
+bool in_view(const Instance& instance, const cv::Size& size) {
+  const cv::Rect whole = box_of(instance.outline);
+  const cv::Rect box = whole & cv::Rect(cv::Point(0, 0), size);
+  return box.width >= 16 && box.height >= 16 && box.area() >= kLeastInFrame * whole.area();
+}
+
+/// How `instance` moved from `last` to `grey`: ECC on its outline's pixels, started from
+/// `step` (its last one) when known, else from the phase correlation of its box (the part in
+/// the frame).
+bool step_shift(const cv::Mat& last, const cv::Mat& grey, const Instance& instance,
+                const std::optional<cv::Point2f>& step, cv::Point2f& shift) {
+  if (step && ecc_shift(last, grey, instance.outline, *step, kPredictedMargin, shift))
     return true;
-  cv::Mat a, b;
+  const cv::Rect box = box_of(instance.outline) & cv::Rect(cv::Point(0, 0), grey.size());
+  cv::Mat a, b, window;
   last(box).convertTo(a, CV_32F);
   grey(box).convertTo(b, CV_32F);
-  cv::Mat window;
   cv::createHanningWindow(window, box.size(), CV_32F);
   const cv::Point2d start = cv::phaseCorrelate(a, b, window);
-  return ecc(cv::Point2f(static_cast<float>(start.x), static_cast<float>(start.y)), kSearchMargin);
+  return ecc_shift(last, grey, instance.outline,
+                   cv::Point2f(static_cast<float>(start.x), static_cast<float>(start.y)),
+                   kSearchMargin, shift);
 }
 
 /// The block (row, column) a point lies in, on a grid of `blocks`.
@@ -182,15 +197,17 @@ cv::Point block_of(const cv::Point2f& p, const cv::Mat& blocks) {
           std::clamp(static_cast<int>(p.y) / kBlock, 0, blocks.rows - 1)};
 }
 
+/// On the instance: inside its outline or within kOutlineSlack of it (the outline is fitted,
+/// and the keypoints on the object's rim ride with it too).
 bool inside_outline(const Instance& instance, const cv::Point2f& p) {
-  return cv::pointPolygonTest(instance.outline, p, false) >= 0;
+  return cv::pointPolygonTest(instance.outline, p, true) >= -kOutlineSlack;
 }
 
 } // namespace
 
 void FeatureReuse::reset() {
   detector_ = nullptr;
-  steps_.clear();
+  motions_.clear();
   features_ = Features();
   matches_.clear();
   detection_ = Detection();
@@ -226,7 +243,8 @@ Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& gr
   size_ = grey.size();
   reference_ = block_means(grey);
   grey.copyTo(last_grey_);
-  steps_.assign(detection_.instances.size(), std::nullopt);
+  grey.copyTo(whole_grey_);
+  motions_.assign(detection_.instances.size(), Motion{std::nullopt, cv::Point2f()});
   since_whole_ = 0;
   last_ = ReuseStats{static_cast<int>(features_.keypoints.size()), 0, 1.0, true, false};
   return detection_;
@@ -270,12 +288,32 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
     const cv::Rect before = box_of(instance.outline) & frame;
     if (cv::countNonZero(changed(block_box(before))) == 0)
       continue; // Still: its keypoints stay as they are.
-    cv::Point2f shift;
-    if (!measure_shift(last_grey_, grey, instance, steps_[n], shift))
+    if (!in_view(instance, grey.size()))
       continue; // Its blocks are extracted again.
+    // Measured from the whole frame its keypoints came from when it was followed from there,
+    // so that the small errors of each step do not add up; else from the last frame.
+    const Motion& motion = motions_[n];
+    cv::Point2f shift, total;
+    std::optional<cv::Point2f> since_whole;
+    if (motion.since_whole && motion.step) {
+      std::vector<cv::Point2f> there = instance.outline;
+      for (cv::Point2f& p : there)
+        p -= *motion.since_whole;
+      if (ecc_shift(whole_grey_, grey, there, *motion.since_whole + *motion.step, kPredictedMargin,
+                    total)) {
+        shift = total - *motion.since_whole;
+        since_whole = total;
+      }
+    }
+    if (!since_whole) {
+      if (!step_shift(last_grey_, grey, instance, motion.step, shift))
+        continue; // Its blocks are extracted again.
+      if (motion.since_whole)
+        since_whole = *motion.since_whole + shift;
+    }
     // What was in view moved to `after`; what comes into view beside it is extracted.
     const cv::Rect after = (before + cv::Point(cvRound(shift.x), cvRound(shift.y))) & frame;
-    moved.push_back({&instance, shift, before, after});
+    moved.push_back({&instance, shift, before, after, since_whole});
     explained(block_box(before)).setTo(255);
     explained(block_box(after)).setTo(255);
   }
@@ -367,11 +405,18 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   matches_ = std::move(matches);
   reference_ = means;
   grey.copyTo(last_grey_);
+  const std::vector<Instance> last_instances = std::move(detection_.instances);
+  const std::vector<Motion> last_motions = std::move(motions_);
   detection_ = detector.detect(grey, features_, matches_, s);
   detection_.timings.features_ms = features_ms;
   detection_.timings.matching_ms = matching_ms;
-  // Each instance's step, for the next frame's start: that of the moved instance it is.
-  steps_.assign(detection_.instances.size(), std::nullopt);
+  // Each instance's motion, for the next frame: that of the last frame's instance it is (one
+  // that lay still kept its own).
+  for (size_t n = 0; n < last_instances.size(); ++n)
+    if (std::none_of(moved.begin(), moved.end(),
+                     [&](const Moved& m) { return m.instance == &last_instances[n]; }))
+      moved.push_back({&last_instances[n], cv::Point2f(), {}, {}, last_motions[n].since_whole});
+  motions_.assign(detection_.instances.size(), Motion{});
   for (size_t n = 0; n < detection_.instances.size(); ++n) {
     const Instance& now = detection_.instances[n];
     const cv::Rect box = box_of(now.outline);
@@ -380,7 +425,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       const double d = cv::norm(m.instance->center + m.shift - now.center);
       if (m.instance->model == now.model && d < nearest) {
         nearest = d;
-        steps_[n] = m.shift;
+        motions_[n] = Motion{m.shift, m.since_whole};
       }
     }
   }

@@ -65,13 +65,19 @@ private:
   Settings settings_;
   double contrast_ = 0.0;
   cv::Size size_;
-  cv::Mat reference_; ///< Block means of the last frame (CV_32F).
-  cv::Mat last_grey_; ///< The last frame.
+  cv::Mat reference_;  ///< Block means of the last frame (CV_32F).
+  cv::Mat last_grey_;  ///< The last frame.
+  cv::Mat whole_grey_; ///< The last frame detected whole.
   Features features_;
   std::vector<Match> matches_;
   Detection detection_;
-  /// Per instance of detection_, how it moved from the frame before (unknown after a whole one).
-  std::vector<std::optional<cv::Point2f>> steps_;
+  /// How an instance of detection_ moved: from the frame before (unknown after a whole one),
+  /// and since the whole frame, when it was followed from there.
+  struct Motion {
+    std::optional<cv::Point2f> step;
+    std::optional<cv::Point2f> since_whole;
+  };
+  std::vector<Motion> motions_;
   ReuseStats last_;
 };
 
