@@ -33,7 +33,7 @@ struct FrameConfig {
   bool tracking = true;                            ///< The `tracking` property.
   double track_timeout_ms = 500.0;                 ///< The `track-timeout` property.
   std::optional<pickdetect::CountLine> count_line; ///< The `count-line` property, parsed.
-  int full_detection_interval = 30;                ///< The `full-detection-interval` property.
+  int full_detection_interval = 15;                ///< The `full-detection-interval` property.
 };
 
 /// The stream's tracker, for attach_frame (streaming thread only).

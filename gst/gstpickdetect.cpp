@@ -103,7 +103,7 @@ constexpr int DEFAULT_THREADS = 1;
 constexpr gboolean DEFAULT_TRACKING = TRUE;
 constexpr guint DEFAULT_TRACK_TIMEOUT = 500;
 #define DEFAULT_COUNT_LINE nullptr
-constexpr guint DEFAULT_FULL_DETECTION_INTERVAL = 30;
+constexpr guint DEFAULT_FULL_DETECTION_INTERVAL = 15;
 
 // The element's defaults are the core's.
 static_assert(pickdetect::Settings{}.method == pickdetect::Method::Voting);
@@ -862,6 +862,7 @@ static void gst_pick_detect_finalize(GObject* object) {
 
 static void gst_pick_detect_init(GstPickDetect* self) {
   self->priv = new GstPickDetectPrivate();
+  self->priv->config.full_detection_interval = DEFAULT_FULL_DETECTION_INTERVAL;
   // As GStreamer's video filters: frames a sink reports late are dropped, not processed.
   gst_base_transform_set_qos_enabled(GST_BASE_TRANSFORM(self), TRUE);
 }

@@ -41,7 +41,7 @@ struct ReuseStats {
 class PICKDETECT_API FeatureReuse {
 public:
   /// `whole_interval`: every so many frames one is detected whole (1: every frame, no reuse).
-  explicit FeatureReuse(int whole_interval = 30) : whole_interval_(whole_interval) {}
+  explicit FeatureReuse(int whole_interval = 15) : whole_interval_(whole_interval) {}
 
   /// detector.detect(grey, settings) reusing what the last frames found. Timings as detect's.
   Detection detect(const Detector& detector, const cv::Mat& grey, const Settings& settings);
