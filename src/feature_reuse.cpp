@@ -124,6 +124,9 @@ constexpr int kPredictedMargin = 8;
 /// A moved instance is this frame's instance of its model whose centre lies nearest where it
 /// moved to, within this share of the box's diagonal.
 constexpr double kSameInstanceShare = 0.1;
+/// A frame in which more than this share of the blocks changed is detected whole: following
+/// its instances would cost more than it saves (unrelated pictures, a camera that moved).
+constexpr double kMostChanged = 0.5;
 /// Keypoints this close outside an instance's outline (pixels) ride with it.
 constexpr double kOutlineSlack = 4.0;
 /// An instance is followed by its motion while this share of its box is in the frame.
@@ -263,7 +266,10 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   cv::Mat diff;
   cv::absdiff(means, reference_, diff);
   const cv::Mat changed = diff > kChangeLevels;
-  if (cv::countNonZero(changed) == 0) {
+  const int changed_blocks = cv::countNonZero(changed);
+  if (changed_blocks > kMostChanged * static_cast<double>(changed.total()))
+    return detect_whole(detector, grey, s, contrast); // Another picture: nothing to reuse.
+  if (changed_blocks == 0) {
     reference_ = means;
     grey.copyTo(last_grey_);
     Detection same = detection_;

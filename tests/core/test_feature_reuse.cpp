@@ -28,8 +28,8 @@ const cv::Mat& box_picture() {
 /// A still textured belt with boxes at `poses`, and sensor noise of its own (seed) when
 /// `noise_seed` is not 0. Black and white marks in a corner keep the frame's grey span, so the
 /// exposure's contrast threshold, the same whatever boxes are in view.
-cv::Mat scene_with(const std::vector<Pose>& poses, int noise_seed = 0) {
-  cv::Mat scene = test_scene::smooth_noise_background(kSize, 77);
+cv::Mat scene_with(const std::vector<Pose>& poses, int noise_seed = 0, int belt_seed = 77) {
+  cv::Mat scene = test_scene::smooth_noise_background(kSize, belt_seed);
   scene(cv::Rect(0, 0, 40, 40)).setTo(0);
   scene(cv::Rect(40, 0, 40, 40)).setTo(255);
   test_scene::paste(scene, box_picture(), poses);
@@ -118,6 +118,18 @@ TEST(FeatureReuse, BoxComingIntoViewIsFoundWithoutAWholeFrame) {
   EXPECT_FALSE(reuse.last().whole);
   EXPECT_LT(reuse.last().extracted_share, 0.6);
   expect_same_instances(got, detector.detect(grey, Settings()), 0.1);
+}
+
+TEST(FeatureReuse, AnotherPictureIsDetectedWhole) {
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(30);
+  reuse.detect(detector, scene_with({Pose{{300.f, 300.f}, 0.0, 0.55}}), Settings());
+  // Another belt under another box, and more light: the whole frame changed (its grey span,
+  // so the contrast threshold, is the same).
+  const cv::Mat other = scene_with({Pose{{600.f, 400.f}, 90.0, 0.6}}, 0, 78) + cv::Scalar(30);
+  const Detection got = reuse.detect(detector, other, Settings());
+  EXPECT_TRUE(reuse.last().whole);
+  expect_same_instances(got, detector.detect(other, Settings()), 0.0);
 }
 
 TEST(FeatureReuse, IntervalOneDetectsEveryFrameWhole) {
