@@ -124,6 +124,8 @@ constexpr int kPredictedMargin = 8;
 /// A moved instance is this frame's instance of its model whose centre lies nearest where it
 /// moved to, within this share of the box's diagonal.
 constexpr double kSameInstanceShare = 0.1;
+/// ECC follows an instance on at most this many pixels a side of the middle of its box.
+constexpr int kEccSide = 128;
 /// A frame in which more than this share of the blocks changed is detected whole: following
 /// its instances would cost more than it saves (unrelated pictures, a camera that moved).
 constexpr double kMostChanged = 0.5;
@@ -144,7 +146,11 @@ bool ecc_shift(const cv::Mat& from, const cv::Mat& to, const std::vector<cv::Poi
                const cv::Point2f& guess, int margin, cv::Point2f& shift) {
   const cv::Rect frame(cv::Point(0, 0), to.size());
   const cv::Point offset(cvRound(guess.x), cvRound(guess.y));
-  const cv::Rect box = box_of(outline);
+  // The middle of the box is enough: ECC's cost follows the window's area, its precision
+  // (about 0.01 px on the belt's objects) hardly changes down to kEccSide.
+  const cv::Rect whole = box_of(outline) & frame;
+  const int w = std::min(whole.width, kEccSide), h = std::min(whole.height, kEccSide);
+  const cv::Rect box(whole.x + (whole.width - w) / 2, whole.y + (whole.height - h) / 2, w, h);
   const cv::Rect window =
       cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin) &
       frame & (frame - offset);
