@@ -228,7 +228,8 @@ GstStructure* message_structure(GstBuffer* buffer, const GstSegment& segment,
                                 const pickdetect::Detection& detection,
                                 const PlaneInstances& planes, const pickdetect::Detector& detector,
                                 double metadata_ms, double overlay_ms, const TrackFields& tracks,
-                                const pickdetect::CommonMotion* motion) {
+                                const pickdetect::CommonMotion* motion,
+                                const std::optional<pickdetect::ReuseStats>& reuse) {
   const GstClockTime ts = GST_BUFFER_PTS(buffer);
   GstClockTime running_time = GST_CLOCK_TIME_NONE, stream_time = GST_CLOCK_TIME_NONE;
   if (segment.format == GST_FORMAT_TIME) {
@@ -260,19 +261,31 @@ GstStructure* message_structure(GstBuffer* buffer, const GstSegment& segment,
     gst_structure_set(s, "motion", G_TYPE_BOOLEAN, static_cast<gboolean>(motion->found), "motion-x",
                       G_TYPE_DOUBLE, motion->velocity.x, "motion-y", G_TYPE_DOUBLE,
                       motion->velocity.y, nullptr);
+  if (reuse)
+    gst_structure_set(s, "features-extracted", G_TYPE_INT, reuse->extracted, "features-reused",
+                      G_TYPE_INT, reuse->reused, "extracted-share", G_TYPE_DOUBLE,
+                      reuse->extracted_share, nullptr);
   return s;
 }
 
 /// Detection and drawing on the mapped frame. Errors are posted and returned.
 GstFlowReturn detect_and_draw(GstElement* element, GstVideoFrame& frame, const FrameFormat& format,
                               const FrameConfig& config, const pickdetect::Detector& detector,
-                              pickdetect::Detection& detection, double& overlay_ms) {
+                              FrameDetection& found, pickdetect::FeatureReuse* reuse) {
+  pickdetect::Detection& detection = found.detection;
+  double& overlay_ms = found.overlay_ms;
   try {
     cv::Mat scratch, colour_scratch;
+    const cv::Mat grey = format.grey(frame, scratch);
     // The colour only tells look-alikes apart whose models have colour.
     const cv::Mat colour =
         detector.has_colour_models() ? format.colour(frame, colour_scratch) : cv::Mat();
-    detection = detector.detect(format.grey(frame, scratch), colour, config.settings);
+    if (reuse) {
+      detection = reuse->detect(detector, grey, config.settings, colour);
+      found.reuse = reuse->last();
+    } else {
+      detection = detector.detect(grey, colour, config.settings);
+    }
   } catch (const std::exception& e) {
     GST_ELEMENT_ERROR(element, STREAM, FAILED, ("Detection failed: %s", e.what()), (nullptr));
     return GST_FLOW_ERROR;
@@ -411,7 +424,7 @@ GstStructure* track_structure(const pickdetect::TrackEvent& e) {
 
 GstFlowReturn detect_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
                            const FrameConfig& config, const pickdetect::Detector& detector,
-                           FrameDetection& found) {
+                           FrameDetection& found, pickdetect::FeatureReuse* reuse) {
   GstVideoFrame frame;
   const auto flags = static_cast<GstMapFlags>(config.draw ? GST_MAP_READWRITE : GST_MAP_READ);
   if (!gst_video_frame_map(&frame, const_cast<GstVideoInfo*>(&format.info()), buffer, flags)) {
@@ -422,8 +435,7 @@ GstFlowReturn detect_frame(GstElement* element, GstBuffer* buffer, const FrameFo
                        GST_VIDEO_INFO_HEIGHT(&format.info())));
     return GST_FLOW_ERROR;
   }
-  const GstFlowReturn ret =
-      detect_and_draw(element, frame, format, config, detector, found.detection, found.overlay_ms);
+  const GstFlowReturn ret = detect_and_draw(element, frame, format, config, detector, found, reuse);
   gst_video_frame_unmap(&frame);
   return ret;
 }
@@ -500,8 +512,9 @@ GstFlowReturn attach_frame(GstElement* element, GstBuffer* buffer, const FrameFo
     const double metadata_ms = ms_since(attaching);
     const bool tracked = tracking && tracking->tracker;
     if (config.post_messages && message)
-      *message = message_structure(buffer, segment, detection, planes, detector, metadata_ms,
-                                   found.overlay_ms, tracks, tracked ? &motion : nullptr);
+      *message =
+          message_structure(buffer, segment, detection, planes, detector, metadata_ms,
+                            found.overlay_ms, tracks, tracked ? &motion : nullptr, found.reuse);
   } catch (const std::exception& e) {
     GST_ELEMENT_ERROR(element, CORE, FAILED, ("Could not attach the instances: %s", e.what()),
                       (nullptr));
@@ -515,7 +528,8 @@ GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameF
                             const GstSegment& segment, GstStructure** message,
                             FrameTracking* tracking) {
   FrameDetection found;
-  const GstFlowReturn ret = detect_frame(element, buffer, format, config, detector, found);
+  pickdetect::FeatureReuse* reuse = tracking && tracking->tracker ? &tracking->reuse : nullptr;
+  const GstFlowReturn ret = detect_frame(element, buffer, format, config, detector, found, reuse);
   if (ret != GST_FLOW_OK)
     return ret;
   return attach_frame(element, buffer, format, config, detector, segment, found, message, tracking);

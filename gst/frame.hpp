@@ -8,6 +8,7 @@
 
 #include <pickdetect/calibration.hpp>
 #include <pickdetect/detector.hpp>
+#include <pickdetect/feature_reuse.hpp>
 #include <pickdetect/tracker.hpp>
 
 #include <gst/gst.h>
@@ -32,6 +33,7 @@ struct FrameConfig {
   bool tracking = true;                            ///< The `tracking` property.
   double track_timeout_ms = 500.0;                 ///< The `track-timeout` property.
   std::optional<pickdetect::CountLine> count_line; ///< The `count-line` property, parsed.
+  int full_detection_interval = 15;                ///< The `full-detection-interval` property.
 };
 
 /// The stream's tracker, for attach_frame (streaming thread only).
@@ -40,6 +42,8 @@ struct FrameTracking {
   /// Tracker time of the last frame (running time, ns); frames without a timestamp follow it
   /// by one frame duration.
   std::optional<gint64> last_time;
+  /// What the last frames found, reused by the next one's detection (threads = 1 only).
+  pickdetect::FeatureReuse reuse;
   /// The frame's "pickdetect-track" and "pickdetect-count" structures, for the caller to post
   /// after the frame's own message.
   std::vector<GstStructure*> messages;
@@ -52,6 +56,8 @@ GstStructure* track_structure(const pickdetect::TrackEvent& event);
 struct FrameDetection {
   pickdetect::Detection detection;
   double overlay_ms = 0.0;
+  /// What the detection reused from the frames before (absent: detected whole, no reuse).
+  std::optional<pickdetect::ReuseStats> reuse;
 };
 
 /// What the negotiated caps decide about working on a frame; set once per caps.
@@ -113,9 +119,10 @@ GstFlowReturn process_frame(GstElement* element, GstBuffer* buffer, const FrameF
 
 /// process_frame in two halves: detection and drawing (any thread), then tracking and the metas
 /// (in frame order, where the tracker lives).
+/// With `reuse`, the detection reuses what the frames before found (streaming thread only).
 GstFlowReturn detect_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
                            const FrameConfig& config, const pickdetect::Detector& detector,
-                           FrameDetection& found);
+                           FrameDetection& found, pickdetect::FeatureReuse* reuse = nullptr);
 GstFlowReturn attach_frame(GstElement* element, GstBuffer* buffer, const FrameFormat& format,
                            const FrameConfig& config, const pickdetect::Detector& detector,
                            const GstSegment& segment, FrameDetection& found, GstStructure** message,

@@ -83,6 +83,7 @@ enum {
   PROP_TRACKING,
   PROP_TRACK_TIMEOUT,
   PROP_COUNT_LINE,
+  PROP_FULL_DETECTION_INTERVAL,
 };
 
 #define DEFAULT_MODEL nullptr
@@ -103,6 +104,7 @@ constexpr int DEFAULT_THREADS = 1;
 constexpr gboolean DEFAULT_TRACKING = TRUE;
 constexpr guint DEFAULT_TRACK_TIMEOUT = 500;
 #define DEFAULT_COUNT_LINE nullptr
+constexpr guint DEFAULT_FULL_DETECTION_INTERVAL = 15;
 
 // The element's defaults are the core's.
 static_assert(pickdetect::Settings{}.method == pickdetect::Method::Voting);
@@ -394,6 +396,9 @@ static void gst_pick_detect_set_property(GObject* object, guint prop_id, const G
   case PROP_TRACK_TIMEOUT:
     config.track_timeout_ms = g_value_get_uint(value);
     break;
+  case PROP_FULL_DETECTION_INTERVAL:
+    config.full_detection_interval = static_cast<int>(g_value_get_uint(value));
+    break;
   case PROP_COUNT_LINE: {
     const gchar* text = g_value_get_string(value);
     try {
@@ -472,6 +477,9 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
     break;
   case PROP_TRACK_TIMEOUT:
     g_value_set_uint(value, static_cast<guint>(config.track_timeout_ms));
+    break;
+  case PROP_FULL_DETECTION_INTERVAL:
+    g_value_set_uint(value, static_cast<guint>(config.full_detection_interval));
     break;
   case PROP_COUNT_LINE:
     g_value_set_string(value, priv->count_line.empty() ? nullptr : priv->count_line.c_str());
@@ -710,6 +718,7 @@ static void reset_tracks(GstPickDetect* self, const char* why) {
   for (const pickdetect::TrackEvent& e : ends)
     priv->tracking.messages.push_back(gstpickdetect::track_structure(e));
   priv->tracking.last_time.reset();
+  priv->tracking.reuse.reset();
   post_track_messages(self);
 }
 
@@ -743,7 +752,9 @@ static gstpickdetect::FrameTracking* prepare_tracking(GstPickDetect* self,
     for (const pickdetect::TrackEvent& e : priv->tracker.end_models_not_in(names))
       priv->tracking.messages.push_back(gstpickdetect::track_structure(e));
     priv->tracked_detector = in.detector.get();
+    priv->tracking.reuse.reset();
   }
+  priv->tracking.reuse.set_whole_interval(in.config.full_detection_interval);
   priv->tracking.tracker = &priv->tracker;
   return &priv->tracking;
 }
@@ -852,6 +863,7 @@ static void gst_pick_detect_finalize(GObject* object) {
 
 static void gst_pick_detect_init(GstPickDetect* self) {
   self->priv = new GstPickDetectPrivate();
+  self->priv->config.full_detection_interval = DEFAULT_FULL_DETECTION_INTERVAL;
   // As GStreamer's video filters: frames a sink reports late are dropped, not processed.
   gst_base_transform_set_qos_enabled(GST_BASE_TRANSFORM(self), TRUE);
 }
@@ -1012,6 +1024,19 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
           "however it stops, jitters or hides on it. Empty: no counting. A new line starts the "
           "counts again; a malformed one is refused with a warning in the log",
           DEFAULT_COUNT_LINE, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_FULL_DETECTION_INTERVAL,
+      g_param_spec_uint(
+          "full-detection-interval", "Full detection interval",
+          "With tracking and threads=1: every N-th frame is detected whole; in between, "
+          "detection reuses the frames before (docs/tracking.md): an instance that moved rigidly "
+          "(a belt) is found again by its measured motion, its keypoints and matches carried "
+          "along; SIFT runs only around what else changed (8x8-pixel blocks whose mean grey moved "
+          "by more than 4 levels: objects coming into view, taken away); a frame in which nothing "
+          "changed keeps the last frame's instances. The frame message tells features-extracted, "
+          "features-reused and extracted-share. 1: every frame detected whole, as with "
+          "tracking=false",
+          1, G_MAXINT, DEFAULT_FULL_DETECTION_INTERVAL, flags));
 
   gst_element_class_set_static_metadata(
       element_class, "Pick detection", "Filter/Analyzer/Video",

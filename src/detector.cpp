@@ -51,7 +51,24 @@ bool finite_instance(const Instance& inst) {
          std::isfinite(inst.scale);
 }
 
+/// The frames detect takes: grey, and beside it, if given, the same frame in colour.
+void check_frames(const cv::Mat& grey, const cv::Mat& colour) {
+  if (!grey.empty() && grey.type() != CV_8UC1)
+    throw Error("frames must be 8-bit single-channel (grey) pictures");
+  if (!colour.empty() && (colour.type() != CV_8UC3 || colour.size() != grey.size()))
+    throw Error("the colour frame must be 8-bit BGR (CV_8UC3) of the grey frame's size");
+}
+
 } // namespace
+
+double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings) {
+  // By default SIFT's contrast threshold follows the frame's exposure: a dim frame keeps its
+  // weaker extrema. ORB has no use for it.
+  return settings.contrast_threshold > 0.0 ? settings.contrast_threshold
+         : settings.features == FeatureKind::Sift
+             ? kSiftContrastThreshold * exposure_contrast_share(grey)
+             : kSiftContrastThreshold;
+}
 
 const char* method_name(Method method) {
   switch (method) {
@@ -101,22 +118,13 @@ Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const 
 
 Detection Detector::detect(const cv::Mat& grey, const cv::Mat& colour,
                            const Settings& settings) const {
-  if (!grey.empty() && grey.type() != CV_8UC1)
-    throw Error("frames must be 8-bit single-channel (grey) pictures");
-  if (!colour.empty() && (colour.type() != CV_8UC3 || colour.size() != grey.size()))
-    throw Error("the colour frame must be 8-bit BGR (CV_8UC3) of the grey frame's size");
+  check_frames(grey, colour);
   Detection result;
   if (grey.cols < kMinFrameSide || grey.rows < kMinFrameSide)
     return result;
   const auto t0 = Clock::now();
-  // By default SIFT's contrast threshold follows the frame's exposure: a dim frame keeps its
-  // weaker extrema. ORB has no use for it.
-  const double contrast = settings.contrast_threshold > 0.0 ? settings.contrast_threshold
-                          : settings.features == FeatureKind::Sift
-                              ? kSiftContrastThreshold * exposure_contrast_share(grey)
-                              : kSiftContrastThreshold;
-  const Features scene =
-      extract_features_scaled(grey, settings.detection_scale, settings.features, contrast);
+  const Features scene = extract_features_scaled(grey, settings.detection_scale, settings.features,
+                                                 frame_contrast_threshold(grey, settings));
   const double features_ms = ms_since(t0);
   result = detect_scene(scene, grey.size(), settings, grey, colour);
   result.timings.features_ms = features_ms;
@@ -128,24 +136,41 @@ Detection Detector::detect(const Features& scene, const cv::Size& frame_size,
   return detect_scene(scene, frame_size, settings, cv::Mat(), cv::Mat());
 }
 
-Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_size,
-                                 const Settings& s, const cv::Mat& grey,
-                                 const cv::Mat& colour) const {
-  Detection result;
-  result.scene_keypoints = static_cast<int>(scene.keypoints.size());
-  auto t = Clock::now();
+std::vector<Match> Detector::match(const Features& scene, const Settings& s) const {
   // The voting method with refinement shares a feature between look-alike models and decides
   // which product an object is from each instance's own evidence (drop_look_alikes); the
   // baselines and the paper's plain voting reject such features, as the paper does.
   const bool share = s.method == Method::Voting && s.refine;
-  const std::vector<Match> matches =
-      (s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift)
-          .match(scene.descriptors, s.ratio, s.search,
-                 share ? Ambiguity::Share : Ambiguity::Reject);
-  result.matches = static_cast<int>(matches.size());
-  result.timings.matching_ms = ms_since(t);
+  return (s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift)
+      .match(scene.descriptors, s.ratio, s.search, share ? Ambiguity::Share : Ambiguity::Reject);
+}
 
-  t = Clock::now();
+Detection Detector::detect(const cv::Mat& grey, const Features& scene,
+                           const std::vector<Match>& matches, const Settings& settings,
+                           const cv::Mat& colour) const {
+  check_frames(grey, colour);
+  return detect_matched(scene, matches, grey.size(), settings, grey, colour);
+}
+
+Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_size,
+                                 const Settings& s, const cv::Mat& grey,
+                                 const cv::Mat& colour) const {
+  const auto t = Clock::now();
+  const std::vector<Match> matches = match(scene, s);
+  const double matching_ms = ms_since(t);
+  Detection result = detect_matched(scene, matches, frame_size, s, grey, colour);
+  result.timings.matching_ms = matching_ms;
+  return result;
+}
+
+Detection Detector::detect_matched(const Features& scene, const std::vector<Match>& matches,
+                                   const cv::Size& frame_size, const Settings& s,
+                                   const cv::Mat& grey, const cv::Mat& colour) const {
+  Detection result;
+  result.scene_keypoints = static_cast<int>(scene.keypoints.size());
+  result.matches = static_cast<int>(matches.size());
+  const bool share = s.method == Method::Voting && s.refine;
+  const auto t = Clock::now();
   for (size_t m = 0; m < models_.size(); ++m) {
     detail::ModelScene ms{models_[m],
                           models_[m].features(s.features).keypoints,

@@ -94,6 +94,10 @@ struct Detection {
   int matches = 0;
 };
 
+/// SIFT's contrast threshold that detect uses on `grey` with `settings`
+/// (Settings::contrast_threshold, else one that follows the frame's exposure).
+PICKDETECT_API double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings);
+
 /// Finds every instance of its models in grey frames (and tells apart by the frame's colour,
 /// when given, look-alike products that differ in colour). Immutable after construction, so one
 /// detector may serve several threads; swapping models means building a new detector.
@@ -120,12 +124,26 @@ public:
   Detection detect(const Features& scene, const cv::Size& frame_size,
                    const Settings& settings = Settings()) const;
 
+  /// The matches of the scene features against every model (the first stage of detect). Each
+  /// scene feature's matches depend on it alone, so the matches of a subset of the features are
+  /// those of the whole restricted to it (FeatureReuse relies on it).
+  std::vector<Match> match(const Features& scene, const Settings& settings = Settings()) const;
+
+  /// detect(grey, colour, settings) from the frame's features and their matches
+  /// (match(scene)), the frame's pixels still telling which instance is on top and, with
+  /// `colour` (as for detect), which of look-alikes that differ in colour lies there.
+  Detection detect(const cv::Mat& grey, const Features& scene, const std::vector<Match>& matches,
+                   const Settings& settings = Settings(), const cv::Mat& colour = cv::Mat()) const;
+
   const std::vector<Model>& models() const { return models_; }
 
 private:
   Detection detect_scene(const Features& scene, const cv::Size& frame_size,
                          const Settings& settings, const cv::Mat& grey,
                          const cv::Mat& colour) const;
+  Detection detect_matched(const Features& scene, const std::vector<Match>& matches,
+                           const cv::Size& frame_size, const Settings& settings,
+                           const cv::Mat& grey, const cv::Mat& colour) const;
 
   struct Matchers; ///< The search indices over the models' features (src/, internal).
 

@@ -9,6 +9,7 @@
 #include <pickdetect/detector.hpp>
 #include <pickdetect/error.hpp>
 #include <pickdetect/export.hpp>
+#include <pickdetect/feature_reuse.hpp>
 #include <pickdetect/features.hpp>
 #include <pickdetect/model.hpp>
 #include <pickdetect/tracker.hpp>

@@ -14,6 +14,7 @@
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/video/video.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -322,6 +323,104 @@ GST_START_TEST(test_timestamps_going_back_reset_tracks) {
 }
 GST_END_TEST;
 
+/// The "pickdetect" frame messages on the bus, in order.
+std::vector<GstStructure*> frame_messages(GstBus* bus) {
+  std::vector<GstStructure*> out;
+  while (GstMessage* msg = gst_bus_pop_filtered(bus, GST_MESSAGE_ELEMENT)) {
+    const GstStructure* s = gst_message_get_structure(msg);
+    if (gst_structure_has_name(s, "pickdetect"))
+      out.push_back(gst_structure_copy(s));
+    gst_message_unref(msg);
+  }
+  return out;
+}
+
+/// The instance centres of a frame message.
+std::vector<cv::Point2d> centres(const GstStructure* s) {
+  std::vector<cv::Point2d> out;
+  const GValue* list = gst_structure_get_value(s, "instances");
+  for (guint k = 0; list && k < gst_value_list_get_size(list); k++) {
+    const GstStructure* in = gst_value_get_structure(gst_value_list_get_value(list, k));
+    cv::Point2d c;
+    gst_structure_get_double(in, "center-x", &c.x);
+    gst_structure_get_double(in, "center-y", &c.y);
+    out.push_back(c);
+  }
+  std::sort(out.begin(), out.end(),
+            [](const cv::Point2d& a, const cv::Point2d& b) { return a.x < b.x; });
+  return out;
+}
+
+/// Pushes frames i = 0, 1, ... (belt_frame(frame_index(i))) through a harness with
+/// `tracking`, the frame messages back.
+template <typename FrameIndex>
+std::vector<GstStructure*> run_frames(gboolean tracking, int n, FrameIndex frame_index) {
+  GstHarness* h =
+      pickdetect::test_harness::pickdetect_harness("model", kBoxPath.c_str(), "tracking", tracking);
+  GstBus* bus = gst_bus_new();
+  gst_element_set_bus(h->element, bus);
+  gst_harness_set_src_caps_str(h, caps().c_str());
+  for (int i = 0; i < n; i++)
+    gst_buffer_unref(gst_harness_push_and_pull(h, belt_frame(frame_index(i), kFrame * i)));
+  std::vector<GstStructure*> messages = frame_messages(bus);
+  gst_element_set_bus(h->element, nullptr);
+  gst_object_unref(bus);
+  gst_harness_teardown(h);
+  fail_unless_equals_int(messages.size(), n);
+  return messages;
+}
+
+void free_all(std::vector<GstStructure*>& messages) {
+  for (GstStructure* s : messages)
+    gst_structure_free(s);
+  messages.clear();
+}
+
+GST_START_TEST(test_still_frames_extract_no_features) {
+  // The same picture three times: after the first, nothing is extracted and the instances are
+  // the first frame's. Without tracking every frame is detected whole, as before.
+  std::vector<GstStructure*> on = run_frames(TRUE, 3, [](int) { return 0; });
+  gint extracted = -1, reused = -1;
+  fail_unless(gst_structure_get_int(on[0], "features-extracted", &extracted));
+  fail_unless(extracted > 100, "first frame: %d features extracted", extracted);
+  for (int i = 1; i < 3; i++) {
+    fail_unless(gst_structure_get_int(on[i], "features-extracted", &extracted));
+    fail_unless(gst_structure_get_int(on[i], "features-reused", &reused));
+    fail_unless_equals_int(extracted, 0);
+    fail_unless(reused > 100, "frame %d: %d features reused", i, reused);
+    fail_unless(centres(on[i]) == centres(on[0]));
+  }
+  std::vector<GstStructure*> off = run_frames(FALSE, 2, [](int) { return 0; });
+  fail_if(gst_structure_has_field(off[1], "features-extracted"));
+  fail_unless(centres(off[1]) == centres(on[1]));
+  free_all(on);
+  free_all(off);
+}
+GST_END_TEST;
+
+GST_START_TEST(test_belt_found_by_motion_as_frame_by_frame) {
+  // Two boxes riding 20 px a frame: after the first frame, SIFT runs on a small share of the
+  // frame at most, and the centres are those of frame-by-frame detection within 0.1 px.
+  std::vector<GstStructure*> on = run_frames(TRUE, 5, [](int i) { return i; });
+  std::vector<GstStructure*> off = run_frames(FALSE, 5, [](int i) { return i; });
+  for (int i = 0; i < 5; i++) {
+    const std::vector<cv::Point2d> a = centres(on[i]), b = centres(off[i]);
+    fail_unless_equals_int(a.size(), 2);
+    fail_unless_equals_int(b.size(), 2);
+    for (size_t k = 0; k < a.size(); k++)
+      fail_unless(cv::norm(a[k] - b[k]) <= 0.1, "frame %d: (%.3f, %.3f) against (%.3f, %.3f)", i,
+                  a[k].x, a[k].y, b[k].x, b[k].y);
+    if (i == 0)
+      continue;
+    gdouble share = 1.0;
+    fail_unless(gst_structure_get_double(on[i], "extracted-share", &share));
+    fail_unless(share < 0.25, "frame %d: SIFT ran on %.2f of the frame", i, share);
+  }
+  free_all(on);
+  free_all(off);
+}
+GST_END_TEST;
+
 static Suite* tracking_suite(void) {
   Suite* s = suite_create("tracking");
   TCase* tc = tcase_create("tracking");
@@ -333,6 +432,8 @@ static Suite* tracking_suite(void) {
   tcase_add_test(tc, test_count_line_counts_each_once);
   tcase_add_test(tc, test_qos_drops_keep_tracks);
   tcase_add_test(tc, test_timestamps_going_back_reset_tracks);
+  tcase_add_test(tc, test_still_frames_extract_no_features);
+  tcase_add_test(tc, test_belt_found_by_motion_as_frame_by_frame);
   return s;
 }
 

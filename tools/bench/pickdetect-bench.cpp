@@ -12,6 +12,9 @@
 //   pickdetect-bench              full run (a few minutes on two cores)
 //   pickdetect-bench --quick      fewer frames and configurations (the meson benchmark)
 //   pickdetect-bench --json       the same figures as JSON
+//   pickdetect-bench --sequence DIR [--set PROP=VALUE]...   the frames of a video sequence
+//                                 (pickdetect-synth --sequence) through ONE element as one
+//                                 stream, per frame against bare OpenCV SIFT on the same frames
 //   pickdetect-bench --json-element   only the pickdetectjson element: its time per frame with
 //                                 30 calibrated instances in the meta (appsrc ! pickdetectjson !
 //                                 fakesink, pad probes around it)
@@ -27,12 +30,19 @@
 #include <pickdetect/detector.hpp>
 #include <pickdetect/features.hpp>
 
+#ifdef PICKDETECT_BENCH_SEQUENCES
+#include "dataset.hpp"
+#include "runner.hpp"
+#endif
+
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <gst/app/gstappsrc.h>
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/gst.h>
 #include <gst/video/video.h>
+#include <glib/gstdio.h>
 
 #include <sys/resource.h>
 
@@ -67,7 +77,13 @@ struct Options {
   gboolean json_element = FALSE;
   gint frames = 0; ///< Counted frames per run; 0 = 15 (4 with --quick).
   gchar* data = nullptr;
-  ~Options() { g_free(data); }
+  gchar* sequence = nullptr; ///< --sequence DIR.
+  gchar** set = nullptr;     ///< --set PROP=VALUE, for the sequence mode.
+  ~Options() {
+    g_free(data);
+    g_free(sequence);
+    g_strfreev(set);
+  }
 };
 
 struct Resolution {
@@ -126,8 +142,9 @@ struct Result {
   std::vector<double> interval; ///< Between one frame leaving the element and the next, ms.
   double sustained_fps = 0.0;   ///< Counted frames / the time they took to come out.
   std::map<std::string, std::vector<double>> stage;
-  std::vector<double> after_share; ///< (frame - features) / frame, per frame.
-  std::vector<double> found;       ///< Instances found per frame.
+  std::vector<double> after_share;                    ///< (frame - features) / frame, per frame.
+  std::vector<double> found;                          ///< Instances found per frame.
+  std::map<std::string, std::vector<double>> counter; ///< kCounters present in the messages.
 };
 
 // ---- frames --------------------------------------------------------------------------------
@@ -182,23 +199,38 @@ GstPadProbeReturn on_leave(GstPad*, GstPadProbeInfo*, gpointer data) {
   std::exit(1);
 }
 
-Result run_element(const Config& c, const std::string& model, const std::vector<cv::Mat>& frames) {
+/// The element's properties by name, values as gst-launch would write them.
+using Properties = std::vector<std::pair<std::string, std::string>>;
+
+/// Optional per-frame fields of the element's bus message that the bench reports when present.
+const char* const kCounters[] = {"features-extracted", "features-reused", "extracted-share"};
+
+/// Pushes `frames` (GRAY8, one stream at `fps`) through appsrc ! pickdetect ! fakesink with
+/// `properties`; per-frame times from the pad probes, stages from the bus messages. The first
+/// frame warms up and is not counted. `one_thread`: the element has one frame thread, so the
+/// probes time each frame.
+Result run_pipeline(const Properties& properties, const std::vector<cv::Mat>& frames, double fps,
+                    bool one_thread) {
   GError* error = nullptr;
   GstElement* pipeline =
       gst_parse_launch("appsrc name=src format=time block=true max-buffers=2 ! "
-                       "pickdetect name=detect draw=true post-messages=true ! fakesink sync=false",
+                       "pickdetect name=detect post-messages=true ! fakesink sync=false",
                        &error);
   if (!pipeline || error)
     die(std::string("cannot build the pipeline: ") + (error ? error->message : "?") +
         " (is the pickdetect plugin on GST_PLUGIN_PATH?)");
   GstElement* src = gst_bin_get_by_name(GST_BIN(pipeline), "src");
   GstElement* detect = gst_bin_get_by_name(GST_BIN(pipeline), "detect");
-  gst_util_set_object_arg(G_OBJECT(detect), "method", c.method.c_str());
-  gst_util_set_object_arg(G_OBJECT(detect), "features", c.features.c_str());
-  g_object_set(detect, "model", model.c_str(), "detection-scale", c.detection_scale, "threads",
-               c.threads, "min-matches", c.min_matches, nullptr);
-  GstCaps* caps = gst_caps_from_string(
-      pickdetect::tools::caps_string("GRAY8", cv::Size(c.res.width, c.res.height)).c_str());
+  for (const auto& [name, value] : properties) {
+    if (!g_object_class_find_property(G_OBJECT_GET_CLASS(detect), name.c_str()))
+      die("the pickdetect element has no property '" + name + "'");
+    gst_util_set_object_arg(G_OBJECT(detect), name.c_str(), value.c_str());
+  }
+  const int fps_n = static_cast<int>(std::lround(fps * 1000));
+  GstCaps* caps =
+      gst_caps_from_string((pickdetect::tools::caps_string("GRAY8", frames.front().size()) +
+                            ",framerate=" + std::to_string(fps_n) + "/1000")
+                               .c_str());
   g_object_set(src, "caps", caps, nullptr);
   gst_caps_unref(caps);
 
@@ -211,18 +243,18 @@ Result run_element(const Config& c, const std::string& model, const std::vector<
   gst_object_unref(src_pad);
 
   if (gst_element_set_state(pipeline, GST_STATE_PLAYING) == GST_STATE_CHANGE_FAILURE)
-    die("the pipeline refused to start (model " + model + ")");
+    die("the pipeline refused to start");
+  const GstClockTime frame_time = static_cast<GstClockTime>(GST_SECOND / fps);
   for (size_t i = 0; i < frames.size(); i++) {
     GstBuffer* buffer = pickdetect::tools::video_buffer(frames[i], "GRAY8");
-    GST_BUFFER_PTS(buffer) = i * GST_SECOND / 30;
-    GST_BUFFER_DURATION(buffer) = GST_SECOND / 30;
+    GST_BUFFER_PTS(buffer) = i * frame_time;
+    GST_BUFFER_DURATION(buffer) = frame_time;
     if (gst_app_src_push_buffer(GST_APP_SRC(src), buffer) != GST_FLOW_OK)
       break; // The error is on the bus.
   }
   gst_app_src_end_of_stream(GST_APP_SRC(src));
 
   Result r;
-  r.config = c;
   GstBus* bus = gst_element_get_bus(pipeline);
   int message_index = 0;
   for (bool done = false; !done;) {
@@ -247,6 +279,14 @@ Result run_element(const Config& c, const std::string& model, const std::vector<
           if (!gst_structure_get_double(s, (std::string(stage) + "-ms").c_str(), &v))
             die(std::string("the bus message has no ") + stage + "-ms");
           r.stage[stage].push_back(v);
+        }
+        for (const char* counter : kCounters) {
+          const GValue* v = gst_structure_get_value(s, counter);
+          GValue d = G_VALUE_INIT;
+          g_value_init(&d, G_TYPE_DOUBLE);
+          if (v && g_value_transform(v, &d))
+            r.counter[counter].push_back(g_value_get_double(&d));
+          g_value_unset(&d);
         }
         const GValue* list = gst_structure_get_value(s, "instances");
         r.found.push_back(list ? gst_value_list_get_size(list) : 0);
@@ -276,11 +316,24 @@ Result run_element(const Config& c, const std::string& model, const std::vector<
   if (probes.left.size() > 2)
     r.sustained_fps = 1000.0 * static_cast<double>(probes.left.size() - 2) /
                       ms_between(probes.left[1], probes.left.back());
-  if (c.threads == 1) {
+  if (one_thread) {
     r.frame.assign(probes.frame_ms.begin() + 1, probes.frame_ms.end());
     for (size_t i = 0; i < r.frame.size(); i++)
       r.after_share.push_back((r.frame[i] - r.stage["features"][i]) / r.frame[i]);
   }
+  return r;
+}
+
+Result run_element(const Config& c, const std::string& model, const std::vector<cv::Mat>& frames) {
+  const Properties properties = {{"model", model},
+                                 {"draw", "true"},
+                                 {"method", c.method},
+                                 {"features", c.features},
+                                 {"detection-scale", std::to_string(c.detection_scale)},
+                                 {"threads", std::to_string(c.threads)},
+                                 {"min-matches", std::to_string(c.min_matches)}};
+  Result r = run_pipeline(properties, frames, 30.0, c.threads == 1);
+  r.config = c;
   return r;
 }
 
@@ -470,6 +523,118 @@ std::string json_stats(const Stats& s) {
   return o.str();
 }
 
+#ifdef PICKDETECT_BENCH_SEQUENCES
+// ---- sequence mode -------------------------------------------------------------------------
+
+/// Bare OpenCV SIFT (cv::SIFT::create() with its defaults, detectAndCompute) on each frame, the
+/// first warming up, in ms.
+std::vector<double> bare_opencv_sift(const std::vector<cv::Mat>& frames) {
+  std::vector<double> ms;
+  for (size_t i = 0; i < frames.size(); i++) {
+    std::vector<cv::KeyPoint> keypoints;
+    cv::Mat descriptors;
+    const Clock::time_point t = Clock::now();
+    cv::SIFT::create()->detectAndCompute(frames[i], cv::noArray(), keypoints, descriptors);
+    const double dt = ms_between(t, Clock::now());
+    if (i > 0)
+      ms.push_back(dt);
+  }
+  return ms;
+}
+
+double mean_of(const std::vector<double>& v) {
+  double sum = 0;
+  for (double x : v)
+    sum += x;
+  return v.empty() ? 0.0 : sum / static_cast<double>(v.size());
+}
+
+/// --sequence DIR: the frames of one video sequence (pickdetect-synth --sequence, dataset.json
+/// with fps) through ONE element as one stream, beside bare OpenCV SIFT on the same frames
+/// before and after it (pooled, so that load drifting during the run weighs on both alike).
+int sequence_bench(const std::string& dir, const Properties& extra, bool json) {
+  using namespace pickdetect::eval;
+  const Dataset dataset = load_dataset(dir);
+  if (dataset.scenes.size() < 2)
+    die(dir + ": a sequence needs two frames or more");
+  std::vector<cv::Mat> frames;
+  for (const Frame& f : load_frames(dataset, false))
+    frames.push_back(
+        cv::Mat(f.height, f.width, CV_8UC1, const_cast<unsigned char*>(f.pixels.data())).clone());
+  gchar* folder = g_dir_make_tmp("pickdetect-bench-XXXXXX", nullptr);
+  if (!folder)
+    die("cannot make a temporary folder for the model files");
+  std::string models;
+  std::vector<std::string> files;
+  for (const ModelInfo& m : dataset.models) {
+    files.push_back(write_model_file(dataset, m, folder));
+    models += (models.empty() ? "" : ",") + files.back();
+  }
+  Properties properties = {{"model", models}};
+  properties.insert(properties.end(), extra.begin(), extra.end());
+  const double fps = dataset.fps.value_or(30.0);
+
+  const std::string load_before = load_average();
+  std::cerr << "pickdetect-bench: " << frames.size() << " frames: bare SIFT, the element";
+  std::vector<double> sift = bare_opencv_sift(frames);
+  const Result r = run_pipeline(properties, frames, fps, true);
+  std::cerr << ", bare SIFT\n";
+  const std::vector<double> again = bare_opencv_sift(frames);
+  sift.insert(sift.end(), again.begin(), again.end());
+  const std::string load_after = load_average();
+  for (const std::string& f : files)
+    g_remove(f.c_str());
+  g_rmdir(folder);
+  g_free(folder);
+
+  const Stats element = stats(r.frame), bare = stats(sift);
+  const double element_mean = mean_of(r.frame), bare_mean = mean_of(sift);
+  std::string set;
+  for (const auto& [name, value] : extra)
+    set += " " + name + "=" + value;
+  if (json) {
+    std::ostringstream j;
+    j << "{\"sequence\": \"" << dir << "\", \"frames\": " << frames.size()
+      << ", \"counted\": " << r.frame.size() << ", \"width\": " << frames[0].cols
+      << ", \"height\": " << frames[0].rows << ", \"fps\": " << fps << ", \"set\": \"" << set
+      << "\", \"load_before\": \"" << load_before << "\", \"load_after\": \"" << load_after
+      << "\", \"element_ms\": " << json_stats(element) << ", \"element_mean_ms\": " << element_mean
+      << ", \"bare_sift_ms\": " << json_stats(bare) << ", \"bare_sift_mean_ms\": " << bare_mean
+      << ", \"ratio_median\": " << element.median / bare.median
+      << ", \"ratio_mean\": " << element_mean / bare_mean
+      << ", \"found\": " << json_stats(stats(r.found));
+    for (const char* stage : kStages)
+      j << ", \"" << stage << "_ms\": " << json_stats(stats(r.stage.at(stage)));
+    for (const auto& [name, values] : r.counter)
+      j << ", \"" << name << "_mean\": " << mean_of(values);
+    j << "}";
+    std::cout << j.str() << "\n";
+    return 0;
+  }
+  std::printf("pickdetect-bench --sequence %s: %zu frames %dx%d at %.0f fps, one stream through "
+              "appsrc ! pickdetect%s ! fakesink; load average %s before, %s after\n",
+              dir.c_str(), frames.size(), frames[0].cols, frames[0].rows, fps, set.c_str(),
+              load_before.c_str(), load_after.c_str());
+  std::printf("  element per frame (pad probes), ms:  median %s, mean %.1f (%zu frames, the first "
+              "warms up)\n",
+              spread(element).c_str(), element_mean, r.frame.size());
+  std::printf("  bare OpenCV SIFT (cv::SIFT detectAndCompute, same grey frames, before and after "
+              "the element), ms:  median %s, mean %.1f\n",
+              spread(bare).c_str(), bare_mean);
+  std::printf("  element / bare SIFT:  %.3f (medians), %.3f (means)\n",
+              element.median / bare.median, element_mean / bare_mean);
+  std::printf("  stages (medians, ms): features %.1f, matching %.2f, clustering %.2f, metadata "
+              "%.2f; instances per frame %.0f\n",
+              stats(r.stage.at("features")).median, stats(r.stage.at("matching")).median,
+              stats(r.stage.at("clustering")).median, stats(r.stage.at("metadata")).median,
+              stats(r.found).median);
+  for (const auto& [name, values] : r.counter)
+    std::printf("  %s: mean %.3f, median %.3f\n", name.c_str(), mean_of(values),
+                stats(values).median);
+  return 0;
+}
+#endif
+
 int run(int argc, char** argv) {
 #ifdef PICKDETECT_PLUGIN_BUILD_DIR
   pickdetect::tools::use_build_tree_plugin(PICKDETECT_PLUGIN_BUILD_DIR);
@@ -485,6 +650,14 @@ int run(int argc, char** argv) {
        "Only the fast configurations at 640x480 with 10 boxes", nullptr},
       {"frames", 'n', 0, G_OPTION_ARG_INT, &o.frames,
        "Counted frames per configuration (default 15, 4 with --quick)", "N"},
+#ifdef PICKDETECT_BENCH_SEQUENCES
+      {"sequence", 0, 0, G_OPTION_ARG_FILENAME, &o.sequence,
+       "Sequence mode: the frames of DIR (pickdetect-synth --sequence) through one element as "
+       "one stream, timed per frame against bare OpenCV SIFT on the same frames",
+       "DIR"},
+      {"set", 0, 0, G_OPTION_ARG_STRING_ARRAY, &o.set,
+       "Sequence mode: set an element property (e.g. tracking=false); repeatable", "PROP=VALUE"},
+#endif
       {"data", 0, 0, G_OPTION_ARG_FILENAME, &o.data,
        "Folder holding box.png (default: OpenCV's samples, " PICKDETECT_BENCH_DATA_DIR ")", "DIR"},
       {nullptr, 0, 0, G_OPTION_ARG_NONE, nullptr, nullptr, nullptr}};
@@ -498,6 +671,18 @@ int run(int argc, char** argv) {
   }
   if (o.json_element)
     return json_element_bench(30, o.frames > 0 ? o.frames : 500, o.json);
+#ifdef PICKDETECT_BENCH_SEQUENCES
+  if (o.sequence) {
+    Properties extra;
+    for (gchar** p = o.set; p && *p; ++p) {
+      const char* eq = std::strchr(*p, '=');
+      if (!eq || eq == *p)
+        die(std::string("--set wants PROP=VALUE, got '") + *p + "'");
+      extra.emplace_back(std::string(*p, static_cast<size_t>(eq - *p)), std::string(eq + 1));
+    }
+    return sequence_bench(o.sequence, extra, o.json);
+  }
+#endif
   const int n = o.frames > 0 ? o.frames : (o.quick ? 4 : 15);
   const std::string model = std::string(o.data ? o.data : PICKDETECT_BENCH_DATA_DIR) + "/box.png";
   const cv::Mat box = cv::imread(model, cv::IMREAD_GRAYSCALE);

@@ -1,0 +1,450 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Detection that reuses the last frame's keypoints and matches where the picture did not change.
+#include <pickdetect/feature_reuse.hpp>
+
+#include <opencv2/imgproc.hpp>
+#include <opencv2/video/tracking.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+
+namespace pickdetect {
+namespace {
+
+/// The frame is compared on blocks of this many pixels a side (their mean grey).
+constexpr int kBlock = 8;
+/// A block whose mean grey moved by more than this many levels changed. The mean of 64 pixels
+/// carries an eighth of the sensor noise (a sigma of 5 levels per pixel: 0.9 levels between two
+/// frames), far below; an object moving over the block changes it by tens of levels.
+constexpr float kChangeLevels = 4.0f;
+/// SIFT's descriptor window reaches 3 * sigma * sqrt(2) * (4 + 1) / 2 from the keypoint, with
+/// sigma half the keypoint's size: 5.3 sizes; the blur that found the extremum and the
+/// orientation window lie within that, plus this many pixels.
+constexpr double kReachPerSize = 5.3;
+constexpr double kReachSlack = 12.0;
+/// Crops reach this far around the changed blocks: keypoints reaching that far or less (size
+/// up to 15.8 px) come out of the crop as they would out of the whole frame. Bigger ones that
+/// reach into a change are left out until the next whole frame.
+constexpr int kCropReach = 96;
+/// Crops start on multiples of this, so that SIFT's octaves (each one every other pixel of the
+/// last) sample the same pixels as on the whole frame down to a scale of 32.
+constexpr int kCropAlign = 32;
+/// The exposure's contrast threshold may drift by this share before the frame is extracted
+/// whole (the noise moves the frame's grey percentiles by a level now and then).
+constexpr double kContrastDrift = 0.02;
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+double reach(const cv::KeyPoint& k) {
+  return kReachPerSize * k.size + kReachSlack;
+}
+
+bool same_settings(const Settings& a, const Settings& b) {
+  return a.method == b.method && a.ratio == b.ratio && a.min_matches == b.min_matches &&
+         a.bandwidth == b.bandwidth && a.max_instances == b.max_instances &&
+         a.allow_scale == b.allow_scale && a.refine == b.refine && a.search == b.search &&
+         a.features == b.features && a.detection_scale == b.detection_scale &&
+         a.contrast_threshold == b.contrast_threshold &&
+         a.ransac_reprojection_px == b.ransac_reprojection_px;
+}
+
+/// Block means of the frame (CV_32F, one per kBlock x kBlock pixels, the last ones partial).
+cv::Mat block_means(const cv::Mat& grey) {
+  cv::Mat small, out;
+  cv::resize(grey, small,
+             cv::Size((grey.cols + kBlock - 1) / kBlock, (grey.rows + kBlock - 1) / kBlock), 0, 0,
+             cv::INTER_AREA);
+  small.convertTo(out, CV_32F);
+  return out;
+}
+
+/// The crops covering every block within kCropReach of a changed block, widened by kCropReach,
+/// aligned and merged until none overlap.
+std::vector<cv::Rect> crops_around(const cv::Mat& changed, const cv::Size& frame, cv::Mat& zone) {
+  const int grow = (kCropReach + kBlock - 1) / kBlock + 1;
+  cv::dilate(changed, zone,
+             cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * grow + 1, 2 * grow + 1)));
+  cv::Mat labels, boxes, centres;
+  const int n = cv::connectedComponentsWithStats(zone, labels, boxes, centres, 8, CV_32S);
+  std::vector<cv::Rect> crops;
+  const cv::Rect whole(cv::Point(0, 0), frame);
+  for (int i = 1; i < n; ++i) {
+    cv::Rect r(boxes.at<int>(i, cv::CC_STAT_LEFT) * kBlock - kCropReach,
+               boxes.at<int>(i, cv::CC_STAT_TOP) * kBlock - kCropReach,
+               boxes.at<int>(i, cv::CC_STAT_WIDTH) * kBlock + 2 * kCropReach,
+               boxes.at<int>(i, cv::CC_STAT_HEIGHT) * kBlock + 2 * kCropReach);
+    const int x0 = std::max(0, r.x / kCropAlign * kCropAlign);
+    const int y0 = std::max(0, r.y / kCropAlign * kCropAlign);
+    crops.push_back(cv::Rect(cv::Point(x0, y0), r.br()) & whole);
+  }
+  for (bool merged = true; merged;) {
+    merged = false;
+    for (size_t i = 0; i < crops.size() && !merged; ++i)
+      for (size_t j = i + 1; j < crops.size() && !merged; ++j)
+        if ((crops[i] & crops[j]).area() > 0) {
+          crops[i] |= crops[j];
+          crops.erase(crops.begin() + static_cast<std::ptrdiff_t>(j));
+          merged = true;
+        }
+  }
+  return crops;
+}
+
+/// Whether a keypoint's whole support lies inside the crop (or runs off the frame's own edge
+/// there, as it would on the whole frame).
+bool supported_in(const cv::KeyPoint& k, const cv::Rect& crop, const cv::Size& frame) {
+  const double r = reach(k);
+  return (crop.x == 0 || k.pt.x - r >= crop.x) && (crop.y == 0 || k.pt.y - r >= crop.y) &&
+         (crop.br().x == frame.width || k.pt.x + r <= crop.br().x) &&
+         (crop.br().y == frame.height || k.pt.y + r <= crop.br().y);
+}
+
+/// An instance of the last frame found again in this one, moved by `shift` (frame pixels).
+struct Moved {
+  const Instance* instance = nullptr;
+  cv::Point2f shift;
+  cv::Rect before, after; ///< Its outline's box in the last frame and in this one.
+  /// How far it moved since the whole frame, when it was followed from there.
+  std::optional<cv::Point2f> since_whole;
+};
+
+/// ECC over the instance's own pixels (its outline, the belt under it left out) must agree this
+/// well for the instance to count as moved rigidly; else its region is extracted again.
+constexpr double kLeastCorrelation = 0.95;
+/// The search reaches this far beyond the instance's box, in pixels (a belt's frame step and
+/// more); the phase correlation that starts ECC finds shifts up to about a third of the box.
+constexpr int kSearchMargin = 48;
+/// Started from its last step, the search reaches this much farther.
+constexpr int kPredictedMargin = 8;
+/// A moved instance is this frame's instance of its model whose centre lies nearest where it
+/// moved to, within this share of the box's diagonal.
+constexpr double kSameInstanceShare = 0.1;
+/// ECC follows an instance on at most this many pixels a side of the middle of its box.
+constexpr int kEccSide = 128;
+/// A frame in which more than this share of the blocks changed is detected whole: following
+/// its instances would cost more than it saves (unrelated pictures, a camera that moved).
+constexpr double kMostChanged = 0.5;
+/// Keypoints this close outside an instance's outline (pixels) ride with it.
+constexpr double kOutlineSlack = 4.0;
+/// An instance is followed by its motion while this share of its box is in the frame.
+constexpr double kLeastInFrame = 0.3;
+
+cv::Rect box_of(const std::vector<cv::Point2f>& outline) {
+  return cv::boundingRect(outline);
+}
+
+/// The shift of the pixels inside `outline` (in `from`'s pixels) from `from` to `to`, by ECC
+/// started at `guess`, on windows of both pictures `margin` pixels around the outline's box
+/// (the same size, as ECC wants; the whole-pixel part of the guess between them). False when
+/// the pictures do not agree.
+bool ecc_shift(const cv::Mat& from, const cv::Mat& to, const std::vector<cv::Point2f>& outline,
+               const cv::Point2f& guess, int margin, cv::Point2f& shift) {
+  const cv::Rect frame(cv::Point(0, 0), to.size());
+  const cv::Point offset(cvRound(guess.x), cvRound(guess.y));
+  // The middle of the box is enough: ECC's cost follows the window's area, its precision
+  // (about 0.01 px on the belt's objects) hardly changes down to kEccSide.
+  const cv::Rect whole = box_of(outline) & frame;
+  const int w = std::min(whole.width, kEccSide), h = std::min(whole.height, kEccSide);
+  const cv::Rect box(whole.x + (whole.width - w) / 2, whole.y + (whole.height - h) / 2, w, h);
+  const cv::Rect window =
+      cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin, box.height + 2 * margin) &
+      frame & (frame - offset);
+  if (window.width < 16 || window.height < 16)
+    return false;
+  cv::Mat mask = cv::Mat::zeros(window.size(), CV_8UC1);
+  std::vector<cv::Point> inside;
+  for (const cv::Point2f& p : outline)
+    inside.emplace_back(cvRound(p.x - window.x), cvRound(p.y - window.y));
+  cv::fillConvexPoly(mask, inside, cv::Scalar(255));
+  cv::erode(mask, mask, cv::Mat(), cv::Point(-1, -1), 2);
+  cv::Mat warp = (cv::Mat_<float>(2, 3) << 1, 0, guess.x - offset.x, 0, 1, guess.y - offset.y);
+  try {
+    const double cc = cv::findTransformECC(
+        from(window), to(window + offset), warp, cv::MOTION_TRANSLATION,
+        cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-4), mask, 1);
+    shift = cv::Point2f(static_cast<float>(offset.x) + warp.at<float>(0, 2),
+                        static_cast<float>(offset.y) + warp.at<float>(1, 2));
+    return cc >= kLeastCorrelation;
+  } catch (const cv::Exception&) {
+    return false; // ECC did not converge.
+  }
+}
+
+/// Whether enough of the instance is in the frame to follow it by its motion.
+bool in_view(const Instance& instance, const cv::Size& size) {
+  const cv::Rect whole = box_of(instance.outline);
+  const cv::Rect box = whole & cv::Rect(cv::Point(0, 0), size);
+  return box.width >= 16 && box.height >= 16 && box.area() >= kLeastInFrame * whole.area();
+}
+
+/// How `instance` moved from `last` to `grey`: ECC on its outline's pixels, started from
+/// `step` (its last one) when known, else from the phase correlation of its box (the part in
+/// the frame).
+bool step_shift(const cv::Mat& last, const cv::Mat& grey, const Instance& instance,
+                const std::optional<cv::Point2f>& step, cv::Point2f& shift) {
+  if (step && ecc_shift(last, grey, instance.outline, *step, kPredictedMargin, shift))
+    return true;
+  const cv::Rect box = box_of(instance.outline) & cv::Rect(cv::Point(0, 0), grey.size());
+  cv::Mat a, b, window;
+  last(box).convertTo(a, CV_32F);
+  grey(box).convertTo(b, CV_32F);
+  cv::createHanningWindow(window, box.size(), CV_32F);
+  const cv::Point2d start = cv::phaseCorrelate(a, b, window);
+  return ecc_shift(last, grey, instance.outline,
+                   cv::Point2f(static_cast<float>(start.x), static_cast<float>(start.y)),
+                   kSearchMargin, shift);
+}
+
+/// The block (row, column) a point lies in, on a grid of `blocks`.
+cv::Point block_of(const cv::Point2f& p, const cv::Mat& blocks) {
+  return {std::clamp(static_cast<int>(p.x) / kBlock, 0, blocks.cols - 1),
+          std::clamp(static_cast<int>(p.y) / kBlock, 0, blocks.rows - 1)};
+}
+
+/// On the instance: inside its outline or within kOutlineSlack of it (the outline is fitted,
+/// and the keypoints on the object's rim ride with it too).
+bool inside_outline(const Instance& instance, const cv::Point2f& p) {
+  return cv::pointPolygonTest(instance.outline, p, true) >= -kOutlineSlack;
+}
+
+} // namespace
+
+void FeatureReuse::reset() {
+  detector_ = nullptr;
+  motions_.clear();
+  features_ = Features();
+  matches_.clear();
+  detection_ = Detection();
+  reference_.release();
+}
+
+void FeatureReuse::set_whole_interval(int frames) {
+  whole_interval_ = std::max(1, frames);
+}
+
+bool FeatureReuse::same_run(const Detector& detector, const cv::Mat& grey, const Settings& s,
+                            double contrast) const {
+  return detector_ == &detector && since_whole_ + 1 < whole_interval_ && grey.size() == size_ &&
+         s.features == FeatureKind::Sift && !(s.detection_scale < 1.0) &&
+         same_settings(s, settings_) &&
+         std::abs(contrast - contrast_) <= kContrastDrift * contrast_;
+}
+
+Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& grey,
+                                     const cv::Mat& colour, const Settings& s, double contrast) {
+  auto t = Clock::now();
+  features_ = extract_features_scaled(grey, s.detection_scale, s.features, contrast);
+  const double features_ms = ms_since(t);
+  t = Clock::now();
+  matches_ = detector.match(features_, s);
+  const double matching_ms = ms_since(t);
+  detection_ = detector.detect(grey, features_, matches_, s, colour);
+  detection_.timings.features_ms = features_ms;
+  detection_.timings.matching_ms = matching_ms;
+  detector_ = &detector;
+  settings_ = s;
+  contrast_ = contrast;
+  size_ = grey.size();
+  reference_ = block_means(grey);
+  grey.copyTo(last_grey_);
+  grey.copyTo(whole_grey_);
+  motions_.assign(detection_.instances.size(), Motion{std::nullopt, cv::Point2f()});
+  since_whole_ = 0;
+  last_ = ReuseStats{static_cast<int>(features_.keypoints.size()), 0, 1.0, true, false};
+  return detection_;
+}
+
+Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, const Settings& s,
+                               const cv::Mat& colour) {
+  if (grey.cols < 16 || grey.rows < 16 || grey.type() != CV_8UC1)
+    return detector.detect(grey, colour, s); // Its checks and its answer for tiny frames.
+  const auto t0 = Clock::now();
+  const double contrast = frame_contrast_threshold(grey, s);
+  if (whole_interval_ <= 1 || !same_run(detector, grey, s, contrast))
+    return detect_whole(detector, grey, colour, s, contrast);
+  ++since_whole_;
+
+  const cv::Mat means = block_means(grey);
+  cv::Mat diff;
+  cv::absdiff(means, reference_, diff);
+  const cv::Mat changed = diff > kChangeLevels;
+  const int changed_blocks = cv::countNonZero(changed);
+  if (changed_blocks > kMostChanged * static_cast<double>(changed.total()))
+    return detect_whole(detector, grey, colour, s, contrast); // Another picture: nothing to reuse.
+  if (changed_blocks == 0) {
+    reference_ = means;
+    grey.copyTo(last_grey_);
+    Detection same = detection_;
+    same.timings = Timings{ms_since(t0), 0.0, 0.0};
+    last_ = ReuseStats{0, static_cast<int>(features_.keypoints.size()), 0.0, false, true};
+    return same;
+  }
+
+  // The last frame's instances under changed blocks that moved rigidly (a belt): their
+  // keypoints and matches move with them, and the blocks they left and came to are explained.
+  std::vector<Moved> moved;
+  cv::Mat explained = cv::Mat::zeros(changed.size(), CV_8UC1);
+  const cv::Rect blocks(cv::Point(0, 0), changed.size());
+  auto block_box = [&](const cv::Rect& r) {
+    const cv::Point tl(r.x / kBlock - 1, r.y / kBlock - 1);
+    const cv::Point br((r.br().x + kBlock - 1) / kBlock + 1, (r.br().y + kBlock - 1) / kBlock + 1);
+    return cv::Rect(tl, br) & blocks;
+  };
+  const cv::Rect frame(cv::Point(0, 0), grey.size());
+  for (size_t n = 0; n < detection_.instances.size(); ++n) {
+    const Instance& instance = detection_.instances[n];
+    const cv::Rect before = box_of(instance.outline) & frame;
+    if (cv::countNonZero(changed(block_box(before))) == 0)
+      continue; // Still: its keypoints stay as they are.
+    if (!in_view(instance, grey.size()))
+      continue; // Its blocks are extracted again.
+    // Measured from the whole frame its keypoints came from when it was followed from there,
+    // so that the small errors of each step do not add up; else from the last frame.
+    const Motion& motion = motions_[n];
+    cv::Point2f shift, total;
+    std::optional<cv::Point2f> since_whole;
+    if (motion.since_whole && motion.step) {
+      std::vector<cv::Point2f> there = instance.outline;
+      for (cv::Point2f& p : there)
+        p -= *motion.since_whole;
+      if (ecc_shift(whole_grey_, grey, there, *motion.since_whole + *motion.step, kPredictedMargin,
+                    total)) {
+        shift = total - *motion.since_whole;
+        since_whole = total;
+      }
+    }
+    if (!since_whole) {
+      if (!step_shift(last_grey_, grey, instance, motion.step, shift))
+        continue; // Its blocks are extracted again.
+      if (motion.since_whole)
+        since_whole = *motion.since_whole + shift;
+    }
+    // What was in view moved to `after`; what comes into view beside it is extracted.
+    const cv::Rect after = (before + cv::Point(cvRound(shift.x), cvRound(shift.y))) & frame;
+    moved.push_back({&instance, shift, before, after, since_whole});
+    explained(block_box(before)).setTo(255);
+    explained(block_box(after)).setTo(255);
+  }
+  const cv::Mat unexplained = changed & (explained == 0);
+
+  // How far each keypoint lies from the nearest block that changed unexplained, in pixels, at
+  // the least.
+  cv::Mat distance;
+  cv::distanceTransform(unexplained == 0, distance, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  auto affected = [&](const cv::KeyPoint& k) {
+    return distance.at<float>(block_of(k.pt, distance)) * kBlock - 1.5 * kBlock <= reach(k);
+  };
+  auto in_explained = [&](const cv::KeyPoint& k) {
+    return explained.at<uchar>(block_of(k.pt, explained)) != 0;
+  };
+  auto carried = [&](const cv::Point2f& p) { // A moved instance's keypoints lie there now.
+    return std::any_of(moved.begin(), moved.end(), [&](const Moved& m) {
+      return frame.contains(p - m.shift) && inside_outline(*m.instance, p - m.shift);
+    });
+  };
+
+  // The keypoints the change left alone or carried along, with their matches.
+  Features merged;
+  std::vector<int> index(features_.keypoints.size(), -1);
+  std::vector<int> kept_rows;
+  for (size_t i = 0; i < features_.keypoints.size(); ++i) {
+    cv::KeyPoint k = features_.keypoints[i];
+    const auto carrier = std::find_if(moved.begin(), moved.end(), [&](const Moved& m) {
+      return inside_outline(*m.instance, k.pt);
+    });
+    if (carrier != moved.end()) {
+      k.pt += carrier->shift;
+      if (!frame.contains(k.pt))
+        continue; // Carried out of view.
+    } else if (affected(k) || in_explained(k))
+      continue; // Uncovered, covered or changed: what lies there now is extracted below.
+    index[i] = static_cast<int>(merged.keypoints.size());
+    merged.keypoints.push_back(k);
+    kept_rows.push_back(static_cast<int>(i));
+  }
+  std::vector<Match> matches;
+  for (const Match& m : matches_)
+    if (index[static_cast<size_t>(m.scene_point)] >= 0) {
+      matches.push_back(m);
+      matches.back().scene_point = index[static_cast<size_t>(m.scene_point)];
+    }
+  // New keypoints where it changed, from crops around the changed blocks.
+  cv::Mat zone;
+  std::vector<cv::Rect> crops;
+  if (cv::countNonZero(unexplained) > 0)
+    crops = crops_around(unexplained, grey.size(), zone);
+  Features fresh;
+  double cropped = 0.0;
+  for (const cv::Rect& crop : crops) {
+    cropped += crop.area();
+    Features f = extract_features(grey(crop), cv::Mat(), FeatureKind::Sift, contrast_);
+    for (size_t i = 0; i < f.keypoints.size(); ++i) {
+      cv::KeyPoint k = f.keypoints[i];
+      k.pt += cv::Point2f(static_cast<float>(crop.x), static_cast<float>(crop.y));
+      if (affected(k) && supported_in(k, crop, grey.size()) && !carried(k.pt)) {
+        fresh.keypoints.push_back(k);
+        fresh.descriptors.push_back(f.descriptors.row(static_cast<int>(i)));
+      }
+    }
+  }
+  const double features_ms = ms_since(t0);
+
+  const auto t = Clock::now();
+  std::vector<Match> fresh_matches;
+  if (!fresh.keypoints.empty())
+    fresh_matches = detector.match(fresh, s);
+  const int offset = static_cast<int>(merged.keypoints.size());
+  for (Match& m : fresh_matches) {
+    m.scene_point += offset;
+    matches.push_back(m);
+  }
+  const double matching_ms = ms_since(t);
+
+  const cv::Mat& like = fresh.descriptors.empty() ? features_.descriptors : fresh.descriptors;
+  merged.descriptors.create(static_cast<int>(kept_rows.size()) + fresh.descriptors.rows, like.cols,
+                            like.type());
+  for (size_t r = 0; r < kept_rows.size(); ++r)
+    features_.descriptors.row(kept_rows[r]).copyTo(merged.descriptors.row(static_cast<int>(r)));
+  if (fresh.descriptors.rows > 0)
+    fresh.descriptors.copyTo(merged.descriptors.rowRange(offset, merged.descriptors.rows));
+  merged.keypoints.insert(merged.keypoints.end(), fresh.keypoints.begin(), fresh.keypoints.end());
+
+  features_ = std::move(merged);
+  matches_ = std::move(matches);
+  reference_ = means;
+  grey.copyTo(last_grey_);
+  const std::vector<Instance> last_instances = std::move(detection_.instances);
+  const std::vector<Motion> last_motions = std::move(motions_);
+  detection_ = detector.detect(grey, features_, matches_, s, colour);
+  detection_.timings.features_ms = features_ms;
+  detection_.timings.matching_ms = matching_ms;
+  // Each instance's motion, for the next frame: that of the last frame's instance it is (one
+  // that lay still kept its own).
+  for (size_t n = 0; n < last_instances.size(); ++n)
+    if (std::none_of(moved.begin(), moved.end(),
+                     [&](const Moved& m) { return m.instance == &last_instances[n]; }))
+      moved.push_back({&last_instances[n], cv::Point2f(), {}, {}, last_motions[n].since_whole});
+  motions_.assign(detection_.instances.size(), Motion{});
+  for (size_t n = 0; n < detection_.instances.size(); ++n) {
+    const Instance& now = detection_.instances[n];
+    const cv::Rect box = box_of(now.outline);
+    double nearest = kSameInstanceShare * std::hypot(box.width, box.height);
+    for (const Moved& m : moved) {
+      const double d = cv::norm(m.instance->center + m.shift - now.center);
+      if (m.instance->model == now.model && d < nearest) {
+        nearest = d;
+        motions_[n] = Motion{m.shift, m.since_whole};
+      }
+    }
+  }
+  last_ = ReuseStats{static_cast<int>(fresh.keypoints.size()), offset,
+                     cropped / static_cast<double>(grey.total()), false, false};
+  return detection_;
+}
+
+} // namespace pickdetect

@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// FeatureReuse (the element's full-detection-interval): a still scene costs no extraction, a
+// moving box is found where whole-frame detection finds it, a box coming into view is found
+// without a whole frame.
+#include "../support/box.hpp"
+#include "common/scene.hpp"
+
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+#include <vector>
+
+using namespace pickdetect;
+using pickdetect::test_scene::Pose;
+
+namespace {
+
+const cv::Size kSize(960, 720);
+
+const cv::Mat& box_picture() {
+  static const cv::Mat picture = cv::imread(test_scene::kData + "/box.png", cv::IMREAD_GRAYSCALE);
+  return picture;
+}
+
+/// A still textured belt with boxes at `poses`, and sensor noise of its own (seed) when
+/// `noise_seed` is not 0. Black and white marks in a corner keep the frame's grey span, so the
+/// exposure's contrast threshold, the same whatever boxes are in view.
+cv::Mat scene_with(const std::vector<Pose>& poses, int noise_seed = 0, int belt_seed = 77) {
+  cv::Mat scene = test_scene::smooth_noise_background(kSize, belt_seed);
+  scene(cv::Rect(0, 0, 40, 40)).setTo(0);
+  scene(cv::Rect(40, 0, 40, 40)).setTo(255);
+  test_scene::paste(scene, box_picture(), poses);
+  if (noise_seed != 0) {
+    cv::Mat noise(kSize, CV_16SC1);
+    cv::RNG rng(static_cast<uint64>(noise_seed));
+    rng.fill(noise, cv::RNG::NORMAL, 0, 2);
+    cv::Mat wide;
+    scene.convertTo(wide, CV_16SC1);
+    cv::Mat(wide + noise).convertTo(scene, CV_8UC1);
+  }
+  return scene;
+}
+
+/// Instances of both detections pair by centre (nearest); each pair's centre, outline and
+/// grasp point within `px`, the same covered and pickable.
+void expect_same_instances(const Detection& got, const Detection& want, double px) {
+  ASSERT_EQ(got.instances.size(), want.instances.size());
+  for (const Instance& w : want.instances) {
+    const Instance* best = nullptr;
+    for (const Instance& g : got.instances)
+      if (!best || cv::norm(g.center - w.center) < cv::norm(best->center - w.center))
+        best = &g;
+    ASSERT_NE(best, nullptr);
+    EXPECT_LE(cv::norm(best->center - w.center), px)
+        << "instance at (" << w.center.x << ", " << w.center.y << ") found at (" << best->center.x
+        << ", " << best->center.y << ")";
+    ASSERT_EQ(best->outline.size(), w.outline.size());
+    for (size_t k = 0; k < w.outline.size(); ++k)
+      EXPECT_LE(cv::norm(best->outline[k] - w.outline[k]), px) << "outline corner " << k;
+    EXPECT_LE(cv::norm(best->grasp - w.grasp), px);
+    EXPECT_EQ(best->covered, w.covered);
+    EXPECT_EQ(best->pickable, w.pickable);
+  }
+}
+
+TEST(FeatureReuse, StillSceneExtractsNoFeaturesAfterTheFirstFrame) {
+  const Detector& detector = test_scene::box_detector();
+  const std::vector<Pose> poses = {Pose{{300.f, 250.f}, 15.0, 0.6},
+                                   Pose{{650.f, 450.f}, 200.0, 0.6}};
+  FeatureReuse reuse(30);
+  const Detection first = reuse.detect(detector, scene_with(poses, 1), Settings());
+  ASSERT_TRUE(reuse.last().whole);
+  ASSERT_EQ(first.instances.size(), 2u);
+  const int whole = reuse.last().extracted;
+  EXPECT_GT(whole, 500);
+  for (int frame = 2; frame <= 4; ++frame) {
+    // New sensor noise in every frame, nothing else.
+    const Detection d = reuse.detect(detector, scene_with(poses, frame), Settings());
+    EXPECT_EQ(reuse.last().extracted, 0)
+        << "frame " << frame << " (the first extracted " << whole << ")";
+    EXPECT_TRUE(reuse.last().unchanged) << "frame " << frame;
+    EXPECT_EQ(reuse.last().extracted_share, 0.0);
+    expect_same_instances(d, first, 1e-6);
+  }
+}
+
+TEST(FeatureReuse, MovingBoxIsFoundWhereWholeFrameDetectionFindsIt) {
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(30);
+  const Pose still{{720.f, 200.f}, 100.0, 0.55};
+  for (int frame = 0; frame < 6; ++frame) {
+    // One box rides right 12 px a frame beside one that lies still.
+    const cv::Mat grey = scene_with({Pose{{200.f + 12.f * frame, 450.f}, 30.0, 0.55}, still});
+    const Detection got = reuse.detect(detector, grey, Settings());
+    const ReuseStats stats = reuse.last();
+    const Detection want = detector.detect(grey, Settings());
+    ASSERT_EQ(want.instances.size(), 2u) << "frame " << frame;
+    expect_same_instances(got, want, 0.1);
+    if (frame > 0) {
+      // The moving box is found again by its motion: no SIFT at all.
+      EXPECT_FALSE(stats.whole) << "frame " << frame;
+      EXPECT_EQ(stats.extracted_share, 0.0) << "frame " << frame;
+      EXPECT_GT(stats.reused, 0) << "frame " << frame;
+    }
+  }
+}
+
+TEST(FeatureReuse, BoxComingIntoViewIsFoundWithoutAWholeFrame) {
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(30);
+  const Pose first{{250.f, 250.f}, 0.0, 0.55};
+  ASSERT_EQ(reuse.detect(detector, scene_with({first}), Settings()).instances.size(), 1u);
+  const cv::Mat grey = scene_with({first, Pose{{700.f, 480.f}, 60.0, 0.55}});
+  const Detection got = reuse.detect(detector, grey, Settings());
+  EXPECT_FALSE(reuse.last().whole);
+  EXPECT_LT(reuse.last().extracted_share, 0.6);
+  expect_same_instances(got, detector.detect(grey, Settings()), 0.1);
+}
+
+TEST(FeatureReuse, AnotherPictureIsDetectedWhole) {
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(30);
+  reuse.detect(detector, scene_with({Pose{{300.f, 300.f}, 0.0, 0.55}}), Settings());
+  // Another belt under another box, and more light: the whole frame changed (its grey span,
+  // so the contrast threshold, is the same).
+  const cv::Mat other = scene_with({Pose{{600.f, 400.f}, 90.0, 0.6}}, 0, 78) + cv::Scalar(30);
+  const Detection got = reuse.detect(detector, other, Settings());
+  EXPECT_TRUE(reuse.last().whole);
+  expect_same_instances(got, detector.detect(other, Settings()), 0.0);
+}
+
+TEST(FeatureReuse, IntervalOneDetectsEveryFrameWhole) {
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(1);
+  const cv::Mat grey = scene_with({Pose{{400.f, 300.f}, 0.0, 0.6}});
+  for (int frame = 0; frame < 2; ++frame) {
+    const Detection got = reuse.detect(detector, grey, Settings());
+    EXPECT_TRUE(reuse.last().whole);
+    expect_same_instances(got, detector.detect(grey, Settings()), 0.0);
+  }
+}
+
+} // namespace
