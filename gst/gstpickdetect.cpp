@@ -88,7 +88,7 @@ enum {
 
 #define DEFAULT_MODEL nullptr
 constexpr GstPickDetectMethod DEFAULT_METHOD = GST_PICK_DETECT_METHOD_VOTING;
-constexpr double DEFAULT_RATIO = 0.8;
+constexpr double DEFAULT_RATIO = 0.0;
 constexpr int DEFAULT_MIN_MATCHES = 4;
 constexpr double DEFAULT_BANDWIDTH = 0.0;
 constexpr int DEFAULT_MAX_INSTANCES = 0;
@@ -900,8 +900,11 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
       gobject_class, PROP_RATIO,
       g_param_spec_double("ratio", "Ratio",
                           "2NN ratio test: a match is kept when its nearest descriptor distance "
-                          "is below this fraction of the second nearest (0 < ratio < 1)",
-                          0.01, 0.99, DEFAULT_RATIO, flags));
+                          "is below this fraction of the second nearest (0 < ratio < 1); 0 = "
+                          "automatic: 0.9 for voting with refine (every instance is checked "
+                          "against the frame), 0.8 (Lowe's, the paper's) for the RANSAC baselines "
+                          "and plain voting",
+                          0.0, 0.99, DEFAULT_RATIO, flags));
   g_object_class_install_property(
       gobject_class, PROP_MIN_MATCHES,
       g_param_spec_int("min-matches", "Minimum matches",

@@ -141,8 +141,9 @@ std::vector<Match> Detector::match(const Features& scene, const Settings& s) con
   // which product an object is from each instance's own evidence (drop_look_alikes); the
   // baselines and the paper's plain voting reject such features, as the paper does.
   const bool share = s.method == Method::Voting && s.refine;
+  const double ratio = s.ratio > 0.0 ? s.ratio : share ? kVotingRatio : kBaselineRatio;
   return (s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift)
-      .match(scene.descriptors, s.ratio, s.search, share ? Ambiguity::Share : Ambiguity::Reject);
+      .match(scene.descriptors, ratio, s.search, share ? Ambiguity::Share : Ambiguity::Reject);
 }
 
 Detection Detector::detect(const cv::Mat& grey, const Features& scene,

@@ -25,10 +25,19 @@ PICKDETECT_API const char* method_name(Method method);
 /// Parses "voting", "ransac-clustered" or "ransac-all"; throws Error on anything else.
 PICKDETECT_API Method parse_method(const std::string& name);
 
+/// The 2NN ratio test's threshold when Settings::ratio is 0 (automatic): voting with refinement
+/// checks every instance against the frame (scene explanation), so it takes the matches of
+/// faint, washed-out or tilted print that a stricter test drops; the RANSAC baselines and plain
+/// voting keep Lowe's 0.8, the paper's, since every extra false match is an outlier to them.
+constexpr double kVotingRatio = 0.9;
+constexpr double kBaselineRatio = 0.8;
+
 /// The numbers that matter, with their units. Defaults are the element's property defaults.
 struct Settings {
   Method method = Method::Voting;
-  double ratio = 0.8; ///< 2NN ratio test threshold (nearest / second nearest).
+  /// 2NN ratio test threshold (nearest / second nearest, 0 < ratio < 1); 0 = automatic:
+  /// kVotingRatio for voting with refinement, kBaselineRatio otherwise.
+  double ratio = 0.0;
   /// Fewest supporting matches an instance needs (the RANSAC baselines: at least 6, as four
   /// matches always fit a homography).
   int min_matches = 4;

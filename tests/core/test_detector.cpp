@@ -113,6 +113,31 @@ TEST(Detector, SeparateInstancesArePickableInScoreOrder) {
   EXPECT_EQ(d.instances[0].pick_order, 1);
 }
 
+TEST(Detector, TheAutomaticRatioIsLooserForVotingThanForTheBaselines) {
+  // Settings::ratio 0: voting with refine, which checks every instance against the frame, takes
+  // the 2NN test at kVotingRatio; the RANSAC baselines and plain voting at kBaselineRatio.
+  const cv::Mat scene = cv::imread(kData + "/box_in_scene.png", cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(scene.empty());
+  const Features features = extract_features(scene);
+  auto matches = [&](Method method, bool refine, double ratio) {
+    Settings s;
+    s.method = method;
+    s.refine = refine;
+    s.ratio = ratio;
+    return box_detector().detect(features, scene.size(), s).matches;
+  };
+  EXPECT_EQ(Settings().ratio, 0.0);
+  const int loose = matches(Method::Voting, true, kVotingRatio);
+  const int strict = matches(Method::Voting, true, kBaselineRatio);
+  ASSERT_GT(loose, strict) << "the two ratios must differ on this frame for the test to tell";
+  EXPECT_EQ(matches(Method::Voting, true, 0.0), loose);
+  EXPECT_EQ(matches(Method::Voting, false, 0.0), matches(Method::Voting, false, kBaselineRatio));
+  EXPECT_EQ(matches(Method::RansacClustered, true, 0.0),
+            matches(Method::RansacClustered, true, kBaselineRatio));
+  EXPECT_EQ(matches(Method::RansacAll, true, 0.0),
+            matches(Method::RansacAll, true, kBaselineRatio));
+}
+
 TEST(Detector, EmptyFrameGivesNoInstance) {
   const Detection d = box_detector().detect(test_scene::plain_background({640, 480}));
   EXPECT_TRUE(d.instances.empty()) << "found:" << describe(d.instances);

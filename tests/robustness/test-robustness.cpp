@@ -408,7 +408,7 @@ GST_START_TEST(test_property_ranges) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double inf = std::numeric_limits<double>::infinity();
 
-  for (const double bad : {nan, -nan, inf, -inf, 0.0, 1.0, 1.5, -0.2})
+  for (const double bad : {nan, -nan, inf, -inf, 1.0, 1.5, -0.2})
     ASSERT_WARNING(g_object_set(pd, "ratio", bad, nullptr));
   for (const double bad : {nan, inf, -inf, -1.0, -0.001})
     ASSERT_WARNING(g_object_set(pd, "bandwidth", bad, nullptr));

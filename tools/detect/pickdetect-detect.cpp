@@ -93,7 +93,10 @@ int main(int argc, char** argv) {
        "sift (default, the paper's) or orb (fast)", "NAME"},
       {"detection-scale", 0, 0, G_OPTION_ARG_DOUBLE, &detection_scale,
        "Extract features from the picture shrunk by this factor (default 1)", "F"},
-      {"ratio", 0, 0, G_OPTION_ARG_DOUBLE, &ratio, "2NN ratio test threshold (default 0.8)", "R"},
+      {"ratio", 0, 0, G_OPTION_ARG_DOUBLE, &ratio,
+       "2NN ratio test threshold (default 0: 0.9 for voting, 0.8 with --no-refine or a RANSAC "
+       "method)",
+       "R"},
       {"min-matches", 0, 0, G_OPTION_ARG_INT, &min_matches,
        "Fewest matches an instance needs (default 4)", "N"},
       {"bandwidth", 0, 0, G_OPTION_ARG_DOUBLE, &bandwidth,
