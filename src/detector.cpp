@@ -2,6 +2,7 @@
 // The detector: features, matching, then one of the three methods per model, then occlusion.
 #include <pickdetect/detector.hpp>
 
+#include "colour_decision.hpp"
 #include "look_alikes.hpp"
 #include "model_scene.hpp"
 #include "scene_explanation.hpp"

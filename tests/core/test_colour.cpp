@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Look-alike products that differ only in colour, told apart by the frame's colour. Scenes
 // built from a crop of OpenCV's fruits.jpg and its recoloured editions.
-#include "../../src/look_alikes.hpp"
+#include "../../src/colour_decision.hpp"
 #include "../support/folder_test.hpp"
 #include "common/scene.hpp"
 
