@@ -950,7 +950,8 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
                           "SIFT's contrast threshold for the frames, on OpenCV's scale (0.04 is "
                           "its default; lower keeps weaker keypoints, at more cost). 0: automatic, "
                           "0.04 lowered in proportion for a dim or flat frame (grey span from the "
-                          "0.1 to the 99.9 percentile under 200 levels), to 0.01 at the least. "
+                          "0.1 to the 99.9 percentile under 200 levels) and halved when a model "
+                          "has faint print (docs/models.md), to 0.01 at the least. "
                           "Set it (e.g. 0.02) where the light changes across the frame",
                           0.0, 0.2, DEFAULT_CONTRAST_THRESHOLD, flags));
   g_object_class_install_property(

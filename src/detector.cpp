@@ -62,13 +62,15 @@ void check_frames(const cv::Mat& grey, const cv::Mat& colour) {
 
 } // namespace
 
-double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings) {
+double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings, double print_share) {
   // By default SIFT's contrast threshold follows the frame's exposure: a dim frame keeps its
   // weaker extrema. ORB has no use for it.
-  return settings.contrast_threshold > 0.0 ? settings.contrast_threshold
-         : settings.features == FeatureKind::Sift
-             ? kSiftContrastThreshold * exposure_contrast_share(grey)
-             : kSiftContrastThreshold;
+  if (settings.contrast_threshold > 0.0)
+    return settings.contrast_threshold;
+  if (settings.features != FeatureKind::Sift)
+    return kSiftContrastThreshold;
+  return kSiftContrastThreshold *
+         std::max(kLeastFrameContrastShare, exposure_contrast_share(grey) * print_share);
 }
 
 const char* method_name(Method method) {
@@ -104,6 +106,11 @@ Detector::Detector(std::vector<Model> models) : models_(std::move(models)) {
         m.principal_points.empty() || m.outline.size() < 3)
       throw Error("model '" + m.name +
                   "' is incomplete (no features, principal points or outline)");
+  // A model found at a lowered threshold has faint print (compute_model_features).
+  if (std::any_of(models_.begin(), models_.end(), [](const Model& m) {
+        return m.contrast_threshold < kSiftContrastThreshold * (1.0 - 1e-9);
+      }))
+    print_share_ = kFaintPrintFrameShare;
   matchers_ = std::make_shared<const Matchers>(
       Matchers{Matcher(models_, FeatureKind::Sift), Matcher(models_, FeatureKind::Orb)});
 }
@@ -111,6 +118,10 @@ Detector::Detector(std::vector<Model> models) : models_(std::move(models)) {
 bool Detector::has_colour_models() const {
   return std::any_of(models_.begin(), models_.end(),
                      [](const Model& m) { return !m.colour.empty(); });
+}
+
+double Detector::frame_contrast_threshold(const cv::Mat& grey, const Settings& settings) const {
+  return pickdetect::frame_contrast_threshold(grey, settings, print_share_);
 }
 
 Detection Detector::detect(const cv::Mat& grey, const Settings& settings) const {

@@ -264,7 +264,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   if (grey.cols < 16 || grey.rows < 16 || grey.type() != CV_8UC1)
     return detector.detect(grey, colour, s); // Its checks and its answer for tiny frames.
   const auto t0 = Clock::now();
-  const double contrast = frame_contrast_threshold(grey, s);
+  const double contrast = detector.frame_contrast_threshold(grey, s);
   if (whole_interval_ <= 1 || !same_run(detector, grey, s, contrast))
     return detect_whole(detector, grey, colour, s, contrast);
   ++since_whole_;

@@ -52,9 +52,6 @@ constexpr double kSpanTail = 0.001;
 /// A frame whose grey spans less than this is taken as exposed darker or flatter than a
 /// well-lit one: every contrast in it, the objects' too, is that much weaker.
 constexpr double kWellLitSpan = 200.0;
-/// The threshold follows the span down to this share of OpenCV's, no lower: below, the extra
-/// extrema are the sensor's noise.
-constexpr double kLeastContrastShare = 0.25;
 
 } // namespace
 
@@ -78,7 +75,7 @@ double exposure_contrast_share(const cv::Mat& grey) {
     return 255;
   };
   const double span = percentile(1.0 - kSpanTail) - percentile(kSpanTail);
-  return std::clamp(span / kWellLitSpan, kLeastContrastShare, 1.0);
+  return std::clamp(span / kWellLitSpan, kLeastFrameContrastShare, 1.0);
 }
 
 const char* feature_name(FeatureKind kind) {

@@ -267,12 +267,13 @@ cv::Mat read_descriptors(const cv::FileNode& node, size_t rows, int cols, const 
 
 } // namespace
 
-/// Appends the SIFT features of the picture's tilted views (Model::max_tilt_deg) to `f`.
-static void add_tilted_views(const Model& model, Features& f) {
+/// Appends the SIFT features of the picture's tilted views (Model::max_tilt_deg), found at
+/// SIFT's contrast threshold `contrast_threshold`, to `f`.
+static void add_tilted_views(const Model& model, Features& f, double contrast_threshold) {
   if (!(model.max_tilt_deg > 0.0))
     return;
   for (const TiltedView& view : tilted_views(model.max_tilt_deg)) {
-    const Features v = features_of_view(model.image, model.mask, view);
+    const Features v = features_of_view(model.image, model.mask, view, contrast_threshold);
     f.keypoints.insert(f.keypoints.end(), v.keypoints.begin(), v.keypoints.end());
     if (!v.descriptors.empty())
       f.descriptors.push_back(v.descriptors);
@@ -280,12 +281,23 @@ static void add_tilted_views(const Model& model, Features& f) {
 }
 
 void compute_model_features(Model& model) {
-  Features f = extract_features(model.image, model.mask, FeatureKind::Sift);
+  // A picture with little print (a white glossy carton) yields few keypoints at SIFT's usual
+  // threshold, and a frame sees only a part of them: its weaker extrema are kept too, halving
+  // the threshold until the picture has enough. A model picture is one clean picture, so its
+  // weak extrema are print, not the noise a frame's would be.
+  double threshold = kSiftContrastThreshold;
+  Features f = extract_features(model.image, model.mask, FeatureKind::Sift, threshold);
+  while (static_cast<int>(f.keypoints.size()) < kModelKeypointTarget &&
+         threshold / 2 >= kLeastModelContrastThreshold - 1e-12) {
+    threshold /= 2;
+    f = extract_features(model.image, model.mask, FeatureKind::Sift, threshold);
+  }
   if (static_cast<int>(f.keypoints.size()) < kMinModelKeypoints)
     throw Error("model picture " + in_quotes(model.image_path) + " yields only " +
                 std::to_string(f.keypoints.size()) + " SIFT keypoints (at least " +
                 std::to_string(kMinModelKeypoints) + " are needed): it has too little texture");
-  add_tilted_views(model, f);
+  add_tilted_views(model, f, threshold);
+  model.contrast_threshold = threshold;
   model.sift = std::move(f);
   model.orb = extract_features(model.image, model.mask, FeatureKind::Orb);
 }
@@ -377,8 +389,17 @@ Model read_model(const cv::FileNode& node, const cv::FileNode& product, const st
     if (static_cast<int>(sift.keypoints.size()) < kMinModelKeypoints)
       throw Error(origin + ": the cache holds only " + std::to_string(sift.keypoints.size()) +
                   " keypoints (at least " + std::to_string(kMinModelKeypoints) + " are needed)");
+    // A cache written before the key existed was found at SIFT's usual threshold.
+    const cv::FileNode contrast = node["contrast_threshold"];
+    if (!contrast.empty()) {
+      if (!contrast.isReal() && !contrast.isInt())
+        throw Error(origin + ": 'contrast_threshold' must be a number (SIFT's, 0.04 its default)");
+      model.contrast_threshold = static_cast<double>(contrast);
+      if (!(model.contrast_threshold > 0.0 && model.contrast_threshold <= 1.0))
+        throw Error(origin + ": 'contrast_threshold' must lie above 0 and at most 1");
+    }
     if (!tilt_given)
-      add_tilted_views(model, sift);
+      add_tilted_views(model, sift, model.contrast_threshold);
     if (!node["orb_keypoints"].empty() && !node["orb_descriptors"].empty()) {
       cv::read(node["orb_keypoints"], model.orb.keypoints);
       model.orb.descriptors = read_descriptors(node["orb_descriptors"], model.orb.keypoints.size(),
@@ -485,6 +506,7 @@ void write_model(cv::FileStorage& store, const Model& model, const fs::path& fol
   write_points("outline", model.outline);
   store << "grasp_point" << model.grasp_point;
   if (cache_features && !model.sift.keypoints.empty()) {
+    store << "contrast_threshold" << model.contrast_threshold;
     cv::write(store, "keypoints", model.sift.keypoints);
     store << "descriptors" << model.sift.descriptors;
     cv::write(store, "orb_keypoints", model.orb.keypoints);

@@ -54,8 +54,9 @@ struct Settings {
   double detection_scale = 1.0;
   /// SIFT's contrast threshold for the frames (OpenCV's scale: kSiftContrastThreshold, 0.04, is
   /// its default); 0 = automatic: 0.04 times exposure_contrast_share(frame), lower for dim or
-  /// flat frames. Set it (e.g. 0.02) where the light changes across the frame (a spot light):
-  /// more keypoints in the darker parts, at more cost everywhere.
+  /// flat frames, halved for models with faint print (Detector::frame_contrast_threshold). Set it
+  /// (e.g. 0.02) where the light changes across the frame (a spot light): more keypoints in the
+  /// darker parts, at more cost everywhere.
   double contrast_threshold = 0.0;
   double ransac_reprojection_px = 5.0; ///< RANSAC baselines: inlier distance in scene pixels.
 };
@@ -103,9 +104,17 @@ struct Detection {
   int matches = 0;
 };
 
-/// SIFT's contrast threshold that detect uses on `grey` with `settings`
-/// (Settings::contrast_threshold, else one that follows the frame's exposure).
-PICKDETECT_API double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings);
+/// Frames searched for a model whose picture has faint print (its features found at a lowered
+/// threshold, Model::contrast_threshold) are searched at this share of the automatic threshold:
+/// the same print, smaller and blurrier in the frame, is fainter there still.
+constexpr double kFaintPrintFrameShare = 0.5;
+
+/// SIFT's contrast threshold for `grey` with `settings`: Settings::contrast_threshold, else
+/// kSiftContrastThreshold times exposure_contrast_share(grey) times `print_share` (1, or
+/// kFaintPrintFrameShare for models with faint print), no less than kLeastFrameContrastShare
+/// of it. Detector::frame_contrast_threshold gives the one detect uses.
+PICKDETECT_API double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings,
+                                               double print_share = 1.0);
 
 /// Finds every instance of its models in grey frames (and tells apart by the frame's colour,
 /// when given, look-alike products that differ in colour). Immutable after construction, so one
@@ -127,6 +136,10 @@ public:
 
   /// Whether any model has colour: only then is a colour frame worth giving.
   bool has_colour_models() const;
+
+  /// SIFT's contrast threshold detect uses on `grey` with `settings`: the free function's,
+  /// with kFaintPrintFrameShare when any model's picture has faint print.
+  double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings) const;
 
   /// Detects from features already extracted from the frame. Without the frame's pixels,
   /// which of two overlapping instances is on top is told from the features alone.
@@ -157,6 +170,7 @@ private:
   struct Matchers; ///< The search indices over the models' features (src/, internal).
 
   std::vector<Model> models_;
+  double print_share_ = 1.0; ///< frame_contrast_threshold's print_share for these models.
   std::shared_ptr<const Matchers> matchers_; ///< Shared by copies: a detector is immutable.
 };
 

@@ -53,6 +53,10 @@ PICKDETECT_API Features extract_features_scaled(const cv::Mat& grey, double scal
 /// their keypoints. Model pictures keep the full threshold.
 PICKDETECT_API double exposure_contrast_share(const cv::Mat& grey);
 
+/// The least share of kSiftContrastThreshold a frame is searched at, whatever lowers it (a dim
+/// frame, models with faint print): below it the extra extrema are the sensor's noise.
+constexpr double kLeastFrameContrastShare = 0.25;
+
 /// How the matching searches the two nearest model descriptors of each scene descriptor.
 enum class Search {
   KdTree,     ///< FLANN's randomised kd-trees, built with a fixed seed: fast, deterministic.
@@ -75,8 +79,8 @@ PICKDETECT_API std::vector<TiltedView> tilted_views(double max_tilt_deg);
 /// SIFT features of `grey` (CV_8UC1; `mask` as for extract_features) seen in `view`, with
 /// their positions, orientations and sizes carried back into the picture's pixels.
 PICKDETECT_API Features features_of_view(const cv::Mat& grey, const cv::Mat& mask,
-                                        const TiltedView& view,
-                          double contrast_threshold = kSiftContrastThreshold);
+                                         const TiltedView& view,
+                                         double contrast_threshold = kSiftContrastThreshold);
 
 /// A correspondence between a model keypoint and a scene keypoint that passed the 2NN test.
 struct Match {

@@ -46,6 +46,11 @@ struct Model {
   /// picture simulated at those tilts (the model file's `max_tilt`; see tilted_views); 0 =
   /// the picture's own SIFT features only. The simulated views' features are part of `sift`.
   double max_tilt_deg = kDefaultMaxTiltDeg;
+  /// SIFT's contrast threshold the picture's features were found at: kSiftContrastThreshold,
+  /// lower for a picture with little print (compute_model_features); a model file's feature
+  /// cache records it (`contrast_threshold`). Frames searched for such a model keep their
+  /// weaker extrema too (Detector::frame_contrast_threshold).
+  double contrast_threshold = kSiftContrastThreshold;
   Features sift; ///< SIFT features of the picture (the paper's), and of its tilted views.
   Features orb;  ///< ORB features of the picture (the fast configuration).
 
@@ -54,6 +59,11 @@ struct Model {
 
 /// Fewest keypoints a model picture must yield to be usable.
 constexpr int kMinModelKeypoints = 12;
+/// A model picture yielding fewer SIFT keypoints than this at SIFT's usual contrast threshold
+/// (kSiftContrastThreshold) is searched again at half the threshold, and so on down to
+/// kLeastModelContrastThreshold (compute_model_features); its tilted views use the same.
+constexpr int kModelKeypointTarget = 400;
+constexpr double kLeastModelContrastThreshold = 0.005;
 
 /// Builds a model from a picture. A picture with an alpha channel marks the object by its alpha;
 /// otherwise the whole picture is the object. Principal points default to the centre and the
