@@ -6,6 +6,7 @@
 #include "look_alikes.hpp"
 #include "model_scene.hpp"
 #include "scene_explanation.hpp"
+#include "stopwatch.hpp"
 
 #include <pickdetect/error.hpp>
 #include <pickdetect/matching.hpp>
@@ -20,7 +21,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <numeric>
 
@@ -36,10 +36,8 @@ constexpr double kHalfScoreMatches = 10.0;
 /// Frames smaller than this on a side hold no instance worth a SIFT run.
 constexpr int kMinFrameSide = 16;
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+using detail::Clock;
+using detail::ms_since;
 
 double score_for(int matches) {
   return matches / (matches + kHalfScoreMatches);
@@ -61,6 +59,15 @@ void check_frames(const cv::Mat& grey, const cv::Mat& colour) {
 }
 
 } // namespace
+
+bool operator==(const Settings& a, const Settings& b) {
+  return a.method == b.method && a.ratio == b.ratio && a.min_matches == b.min_matches &&
+         a.bandwidth == b.bandwidth && a.max_instances == b.max_instances &&
+         a.allow_scale == b.allow_scale && a.refine == b.refine && a.search == b.search &&
+         a.features == b.features && a.detection_scale == b.detection_scale &&
+         a.contrast_threshold == b.contrast_threshold &&
+         a.ransac_reprojection_px == b.ransac_reprojection_px;
+}
 
 double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings, double print_share) {
   // By default SIFT's contrast threshold follows the frame's exposure: a dim frame keeps its

@@ -2,11 +2,12 @@
 // Detection that reuses the last frame's keypoints and matches where the picture did not change.
 #include <pickdetect/feature_reuse.hpp>
 
+#include "stopwatch.hpp"
+
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <optional>
 
@@ -35,22 +36,11 @@ constexpr int kCropAlign = 32;
 /// whole (the noise moves the frame's grey percentiles by a level now and then).
 constexpr double kContrastDrift = 0.02;
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+using detail::Clock;
+using detail::ms_since;
 
 double reach(const cv::KeyPoint& k) {
   return kReachPerSize * k.size + kReachSlack;
-}
-
-bool same_settings(const Settings& a, const Settings& b) {
-  return a.method == b.method && a.ratio == b.ratio && a.min_matches == b.min_matches &&
-         a.bandwidth == b.bandwidth && a.max_instances == b.max_instances &&
-         a.allow_scale == b.allow_scale && a.refine == b.refine && a.search == b.search &&
-         a.features == b.features && a.detection_scale == b.detection_scale &&
-         a.contrast_threshold == b.contrast_threshold &&
-         a.ransac_reprojection_px == b.ransac_reprojection_px;
 }
 
 /// Block means of the frame (CV_32F, one per kBlock x kBlock pixels, the last ones partial).
@@ -230,8 +220,7 @@ void FeatureReuse::set_whole_interval(int frames) {
 bool FeatureReuse::same_run(const Detector& detector, const cv::Mat& grey, const Settings& s,
                             double contrast) const {
   return detector_ == &detector && since_whole_ + 1 < whole_interval_ && grey.size() == size_ &&
-         s.features == FeatureKind::Sift && !(s.detection_scale < 1.0) &&
-         same_settings(s, settings_) &&
+         s.features == FeatureKind::Sift && !(s.detection_scale < 1.0) && s == settings_ &&
          std::abs(contrast - contrast_) <= kContrastDrift * contrast_;
 }
 

@@ -61,6 +61,12 @@ struct Settings {
   double ransac_reprojection_px = 5.0; ///< RANSAC baselines: inlier distance in scene pixels.
 };
 
+/// Whether two settings agree in every field (a field added to Settings is added here too).
+PICKDETECT_API bool operator==(const Settings& a, const Settings& b);
+inline bool operator!=(const Settings& a, const Settings& b) {
+  return !(a == b);
+}
+
 /// One object instance found in the frame, in scene pixels (y axis down).
 struct Instance {
   int model = 0;          ///< Index of the model in the detector's list.

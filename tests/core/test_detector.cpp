@@ -138,6 +138,26 @@ TEST(Detector, TheAutomaticRatioIsLooserForVotingThanForTheBaselines) {
             matches(Method::RansacAll, true, kBaselineRatio));
 }
 
+TEST(Detector, SettingsAreEqualOnlyWhenEveryFieldIs) {
+  const Settings base;
+  EXPECT_TRUE(base == Settings());
+  std::vector<Settings> changed(12, base);
+  changed[0].method = Method::RansacAll;
+  changed[1].ratio = 0.7;
+  changed[2].min_matches = 6;
+  changed[3].bandwidth = 20.0;
+  changed[4].max_instances = 3;
+  changed[5].allow_scale = false;
+  changed[6].refine = false;
+  changed[7].search = Search::BruteForce;
+  changed[8].features = FeatureKind::Orb;
+  changed[9].detection_scale = 0.5;
+  changed[10].contrast_threshold = 0.02;
+  changed[11].ransac_reprojection_px = 3.0;
+  for (size_t i = 0; i < changed.size(); ++i)
+    EXPECT_TRUE(changed[i] != base) << "field " << i;
+}
+
 TEST(Detector, EmptyFrameGivesNoInstance) {
   const Detection d = box_detector().detect(test_scene::plain_background({640, 480}));
   EXPECT_TRUE(d.instances.empty()) << "found:" << describe(d.instances);
