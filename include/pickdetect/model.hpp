@@ -62,7 +62,7 @@ constexpr int kMinModelKeypoints = 12;
 /// A model picture yielding fewer SIFT keypoints than this at SIFT's usual contrast threshold
 /// (kSiftContrastThreshold) is searched again at half the threshold, and so on down to
 /// kLeastModelContrastThreshold (compute_model_features); its tilted views use the same.
-constexpr int kModelKeypointTarget = 400;
+constexpr int kModelKeypointTarget = 250;
 constexpr double kLeastModelContrastThreshold = 0.005;
 
 /// Builds a model from a picture. A picture with an alpha channel marks the object by its alpha;
