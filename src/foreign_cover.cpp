@@ -38,6 +38,9 @@ struct CellSums {
 /// One cell's figures: band-passed detail (standard deviations), correlation, grey levels.
 struct CellLook {
   bool compared = false; ///< Enough pixels, and the model's picture has texture there.
+  /// Enough pixels, the model's picture plain there, and the frame shows detail
+  /// (kMinDetailOverPlain).
+  bool detail_over_plain = false;
   double detail_f = 0, detail_m = 0, correlation = 0, level_f = 0, level_m = 0;
 };
 
@@ -146,8 +149,12 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
     CellLook& l = looks[i];
     const double mf = s.f / s.n, mm = s.m / s.n;
     const double vf = std::max(0.0, s.ff / s.n - mf * mf), vm = s.mm / s.n - mm * mm;
-    if (!(vm >= kMinCellTexture * kMinCellTexture))
+    if (!(vm >= kMinCellTexture * kMinCellTexture)) {
+      l.detail_f = std::sqrt(vf);
+      l.detail_m = std::sqrt(std::max(0.0, vm));
+      l.detail_over_plain = l.detail_f >= kMinDetailOverPlain;
       continue;
+    }
     l.compared = true;
     l.detail_f = std::sqrt(vf);
     l.detail_m = std::sqrt(vm);
@@ -171,8 +178,14 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < columns; ++c) {
       const CellLook& l = looks[static_cast<size_t>(r) * columns + c];
-      if (!l.compared)
+      if (!l.compared) {
+        // Texture where the print is plain, well beyond what the frame keeps of the print's
+        // own faint detail there: a textured object lies on a plain part of the print.
+        if (l.detail_over_plain &&
+            (!seen_enough || l.detail_f >= kDetailOverPlainTimes * detail_kept * l.detail_m))
+          foreign.at<uchar>(r, c) = 255;
         continue;
+      }
       bool other = false;
       if (l.detail_f >= kMinFrameTexture)
         other = l.correlation < kMaxForeignCorrelation;
@@ -187,11 +200,33 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
         foreign.at<uchar>(r, c) = 255;
     }
 
+  // The cells that do not show the print: something else, or flat where no highlight washes the
+  // print out. A cover seen through motion blur or in dim light is partly flat, partly smeared
+  // texture: its flat cells join the cells that show something else into one group.
+  cv::Mat unseen = foreign.clone();
+  if (seen_enough)
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < columns; ++c) {
+        const CellLook& l = looks[static_cast<size_t>(r) * columns + c];
+        if (l.compared && l.detail_f < kMinFrameTexture &&
+            l.level_f <= light * (l.level_m + kGlareLevels))
+          unseen.at<uchar>(r, c) = 255;
+      }
   cv::Mat labels, stats, centroids;
-  const int groups = cv::connectedComponentsWithStats(foreign, labels, stats, centroids, 4);
+  const int groups = cv::connectedComponentsWithStats(unseen, labels, stats, centroids, 4);
+  std::vector<int> other(static_cast<size_t>(groups), 0);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < columns; ++c)
+      if (foreign.at<uchar>(r, c))
+        ++other[static_cast<size_t>(labels.at<int>(r, c))];
   int largest = 0;
-  for (int g = 1; g < groups; ++g)
-    largest = std::max(largest, stats.at<int>(g, cv::CC_STAT_AREA));
+  for (int g = 1; g < groups; ++g) {
+    const int cells = stats.at<int>(g, cv::CC_STAT_AREA);
+    const int seen_other = other[static_cast<size_t>(g)];
+    if (seen_other >= kMinForeignCells ||
+        (seen_other >= kMinForeignInGroup && cells >= kMinMixedGroupCells))
+      largest = std::max(largest, cells);
+  }
   return largest;
 }
 

@@ -32,16 +32,35 @@ constexpr double kFlatCoverDetail = 2.0;
 constexpr double kFlatCoverShare = 0.25;
 constexpr double kGlareLevels = 30.0;
 
-/// An instance counts as covered when at least this many connected cells show something else
-/// (groups of noise, glare and blur on uncovered instances stayed smaller on the development
-/// sets and the README's synthetic ones).
-constexpr int kMinForeignCells = 4;
+/// Where the model's picture is too plain to compare (under kMinCellTexture), a frame cell with
+/// at least kMinDetailOverPlain of band-passed detail, and at least kDetailOverPlainTimes the
+/// detail the frame keeps of the picture's own faint texture there (the frame may be sharper
+/// than the picture), shows something else: a textured object lying on a plain part of the
+/// print. A threshold of 8 also flagged an uncovered box of a synthetic cover set, 10 did not
+/// (docs/accuracy.md).
+constexpr double kMinDetailOverPlain = 10.0;
+constexpr double kDetailOverPlainTimes = 3.0;
 
-/// The largest 4-connected group of cells where the frame shows something else than the
-/// instance: the model's picture, carried into the frame by the instance's homography, and the
-/// frame are compared cell by cell (normalised cross-correlation at half size, through a
-/// band-pass that leaves out light and blur); a flat frame cell counts when the print would
-/// show clear detail there and it is no highlight (kFlatCoverDetail). Cells outside the frame,
+/// An instance counts as covered when a connected group of cells that do not show its print holds
+/// at least kMinForeignCells cells that show something else, or at least kMinForeignInGroup
+/// such cells among kMinMixedGroupCells or more (the others flat where the print would show: a
+/// cover seen through motion blur is partly flat, partly smeared texture). Groups of noise,
+/// glare, blur and a touching neighbour's edge on uncovered instances stayed smaller on the
+/// development sets, the README's synthetic ones and docs/hard-sets.md's (4 cells with 3 that
+/// show something else were a packed box's blurred edge).
+constexpr int kMinForeignCells = 4;
+constexpr int kMinForeignInGroup = 3;
+constexpr int kMinMixedGroupCells = 5;
+
+/// The largest 4-connected group of cells where the frame does not show the instance's print,
+/// among the groups that show enough of something else (kMinForeignCells): the
+/// model's picture, carried into the frame by the instance's homography, and the frame are
+/// compared cell by cell (normalised cross-correlation at half size, through a band-pass that
+/// leaves out light and blur). A cell shows something else where it correlates under
+/// kMaxForeignCorrelation, where it is flat though the print would show clear detail there and
+/// it is no highlight (kFlatCoverDetail), or where it shows texture on a plain part of the
+/// print (kMinDetailOverPlain); a flat cell that is no highlight does not show the print and
+/// joins the group around it. Cells outside the frame,
 /// outside the model's mask, near the edge of what is seen of it, or under one of `above`
 /// (instances lying on this one) are not compared. Scattered single cells come from noise and
 /// glare; an object lying on the instance leaves a connected group. `grey`: the frame, CV_8UC1.

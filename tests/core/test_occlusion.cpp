@@ -152,12 +152,19 @@ template <typename Draw> Instance detect_one(const Pose& pose, Draw&& draw) {
   return d.instances.empty() ? Instance() : d.instances[0];
 }
 
-/// A striped card (a package of another kind) `side` pixels wide, centred at `at`.
-void striped_card(cv::Mat& scene, cv::Point at, int side) {
+/// A striped card (a package of another kind) `side` pixels wide, centred at `at`: grey level
+/// `ground`, stripes of `stripe`.
+void striped_card(cv::Mat& scene, cv::Point at, int side, int ground = 200, int stripe = 60) {
   const cv::Rect card(at.x - side / 2, at.y - side / 2, side, side);
-  scene(card).setTo(cv::Scalar(200));
+  scene(card).setTo(cv::Scalar(ground));
   for (int x = card.x + 4; x < card.x + card.width; x += 9)
-    cv::line(scene, {x, card.y}, {x + side / 3, card.y + card.height - 1}, cv::Scalar(60), 2);
+    cv::line(scene, {x, card.y}, {x + side / 3, card.y + card.height - 1}, cv::Scalar(stripe), 2);
+}
+
+/// Where `inst` carries the point `p` of its model picture.
+cv::Point in_frame(const Instance& inst, cv::Point2d p) {
+  const cv::Vec3d at = inst.homography * cv::Vec3d(p.x, p.y, 1.0);
+  return {cvRound(at[0] / at[2]), cvRound(at[1] / at[2])};
 }
 
 } // namespace
@@ -184,6 +191,36 @@ TEST(Occlusion, APlainObjectLyingOnABoxCoversIt) {
   });
   EXPECT_GE(under.matches, 20);
   EXPECT_TRUE(under.covered) << "a plain lid lies on the box";
+  EXPECT_FALSE(under.pickable);
+}
+
+TEST(Occlusion, ATexturedObjectOnAnUnprintedPartOfABoxCoversIt) {
+  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
+  const Instance free = detect_one(pose, [](cv::Mat&) {});
+  ASSERT_FALSE(free.covered);
+  // box.png's upper left (about x 36-130, y 12-48 of the picture) is plain card: no print to
+  // compare with. A striped card lying there shows texture the print cannot have.
+  const cv::Point centre = in_frame(free, {80.0, 32.0});
+  const Instance under = detect_one(pose, [&](cv::Mat& s) { striped_card(s, centre, 40); });
+  EXPECT_GE(under.matches, 20);
+  EXPECT_TRUE(under.covered) << "a card lies on the box's plain corner";
+  EXPECT_FALSE(under.pickable);
+}
+
+TEST(Occlusion, ACardBlurredByTheBeltCoversTheBoxItLiesOn) {
+  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
+  const Instance free = detect_one(pose, [](cv::Mat&) {});
+  ASSERT_FALSE(free.covered);
+  // A dim card with faint stripes over the box's print, the whole frame then blurred by a belt
+  // moving 11 pixels while the shutter was open: part of the card is flat, part shows smeared
+  // stripes, and no part of it shows the print.
+  const cv::Point centre = in_frame(free, {200.0, 100.0});
+  const Instance under = detect_one(pose, [&](cv::Mat& s) {
+    striped_card(s, centre, 48, 100, 80);
+    cv::blur(s, s, cv::Size(11, 1));
+  });
+  EXPECT_GE(under.matches, 20);
+  EXPECT_TRUE(under.covered) << "a card lies on the box";
   EXPECT_FALSE(under.pickable);
 }
 
