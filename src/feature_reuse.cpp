@@ -2,6 +2,7 @@
 // Detection that reuses the last frame's keypoints and matches where the picture did not change.
 #include <pickdetect/feature_reuse.hpp>
 
+#include "motion_blur.hpp"
 #include "stopwatch.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -123,6 +124,19 @@ constexpr double kMostChanged = 0.5;
 constexpr double kOutlineSlack = 4.0;
 /// An instance is followed by its motion while this share of its box is in the frame.
 constexpr double kLeastInFrame = 0.3;
+/// The moved instances move together (a belt) when each one's step lies within this share of
+/// their median step (or kBeltAgreePx, whichever is more) of it.
+constexpr double kBeltAgreeShare = 0.15;
+constexpr double kBeltAgreePx = 1.0;
+/// A belt's step is at least this long (pixels a frame); slower, its blur is too short to undo.
+constexpr double kLeastBeltStep = 2.0;
+/// The blur is measured on at most this many of the instances the belt carries.
+constexpr size_t kBlurMeasured = 3;
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
 
 cv::Rect box_of(const std::vector<cv::Point2f>& outline) {
   return cv::boundingRect(outline);
@@ -211,6 +225,8 @@ void FeatureReuse::reset() {
   matches_.clear();
   detection_ = Detection();
   reference_.release();
+  belt_step_.reset();
+  exposure_.reset();
 }
 
 void FeatureReuse::set_whole_interval(int frames) {
@@ -227,7 +243,13 @@ bool FeatureReuse::same_run(const Detector& detector, const cv::Mat& grey, const
 Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& grey,
                                      const cv::Mat& colour, const Settings& s, double contrast) {
   auto t = Clock::now();
-  features_ = extract_features_scaled(grey, s.detection_scale, s.features, contrast);
+  // SIFT on the frame with the belt's motion blur undone (when known: the run goes on).
+  const bool sharpen = s.features == FeatureKind::Sift && !(s.detection_scale < 1.0) &&
+                       detector_ == &detector && grey.size() == size_ && s == settings_;
+  if (!sharpen)
+    belt_step_.reset();
+  features_ = extract_features_scaled(sharpen ? detail::undo_motion_blur(grey, belt_blur()) : grey,
+                                      s.detection_scale, s.features, contrast);
   const double features_ms = ms_since(t);
   t = Clock::now();
   matches_ = detector.match(features_, s);
@@ -263,8 +285,10 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   cv::absdiff(means, reference_, diff);
   const cv::Mat changed = diff > kChangeLevels;
   const int changed_blocks = cv::countNonZero(changed);
-  if (changed_blocks > kMostChanged * static_cast<double>(changed.total()))
-    return detect_whole(detector, grey, colour, s, contrast); // Another picture: nothing to reuse.
+  if (changed_blocks > kMostChanged * static_cast<double>(changed.total())) {
+    belt_step_.reset(); // Another picture: nothing to reuse, no belt known to move in it.
+    return detect_whole(detector, grey, colour, s, contrast);
+  }
   if (changed_blocks == 0) {
     reference_ = means;
     grey.copyTo(last_grey_);
@@ -320,6 +344,11 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
     explained(block_box(after)).setTo(255);
   }
   const cv::Mat unexplained = changed & (explained == 0);
+  std::vector<std::pair<const Instance*, cv::Point2f>> shifts;
+  for (const Moved& m : moved)
+    shifts.emplace_back(m.instance, m.shift);
+  measure_belt(detector, grey, shifts);
+  const cv::Point2f blur = belt_blur();
 
   // How far each keypoint lies from the nearest block that changed unexplained, in pixels, at
   // the least.
@@ -371,7 +400,8 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   double cropped = 0.0;
   for (const cv::Rect& crop : crops) {
     cropped += crop.area();
-    Features f = extract_features(grey(crop), cv::Mat(), FeatureKind::Sift, contrast_);
+    Features f = extract_features(detail::undo_motion_blur(grey(crop), blur), cv::Mat(),
+                                  FeatureKind::Sift, contrast_);
     for (size_t i = 0; i < f.keypoints.size(); ++i) {
       cv::KeyPoint k = f.keypoints[i];
       k.pt += cv::Point2f(static_cast<float>(crop.x), static_cast<float>(crop.y));
@@ -434,6 +464,59 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   last_ = ReuseStats{static_cast<int>(fresh.keypoints.size()), offset,
                      cropped / static_cast<double>(grey.total()), false, false};
   return detection_;
+}
+
+cv::Point2f FeatureReuse::belt_blur() const {
+  if (!belt_step_ || !exposure_)
+    return {};
+  return *belt_step_ * static_cast<float>(*exposure_);
+}
+
+void FeatureReuse::measure_belt(
+    const Detector& detector, const cv::Mat& grey,
+    const std::vector<std::pair<const Instance*, cv::Point2f>>& shifts) {
+  belt_step_.reset();
+  std::vector<double> xs, ys;
+  for (const auto& [instance, shift] : shifts) {
+    xs.push_back(shift.x);
+    ys.push_back(shift.y);
+  }
+  if (xs.empty())
+    return;
+  const cv::Point2f step(static_cast<float>(median(xs)), static_cast<float>(median(ys)));
+  const double length = cv::norm(step);
+  if (length < kLeastBeltStep)
+    return;
+  const double agree = std::max(kBeltAgreePx, kBeltAgreeShare * length);
+  for (const auto& [instance, shift] : shifts)
+    if (cv::norm(shift - step) > agree)
+      return; // Not one motion: no belt.
+  belt_step_ = step;
+  if (exposure_ && since_whole_ != 1)
+    return; // Measured once after each whole frame.
+  // On the instances most in view, each at its pose in this frame.
+  std::vector<std::pair<double, size_t>> order;
+  for (size_t i = 0; i < shifts.size(); ++i)
+    order.emplace_back(-shifts[i].first->visibility * cv::contourArea(shifts[i].first->outline), i);
+  std::sort(order.begin(), order.end());
+  std::vector<double> exposures;
+  for (size_t k = 0; k < order.size() && k < kBlurMeasured; ++k) {
+    const auto& [instance, shift] = shifts[order[k].second];
+    const cv::Matx33d moved_by(1, 0, shift.x, 0, 1, shift.y, 0, 0, 1);
+    const std::optional<double> blur =
+        detail::measure_blur_length(grey, detector.models()[static_cast<size_t>(instance->model)],
+                                    moved_by * instance->homography, shift);
+    if (blur)
+      exposures.push_back(*blur / cv::norm(shift));
+  }
+  if (exposures.empty())
+    return;
+  const bool first = !exposure_;
+  exposure_ = median(exposures);
+  // The first frame to undo the blur on is detected whole: what the blur hid there till now is
+  // found at once.
+  if (first && cv::norm(belt_blur()) >= detail::kLeastBlurPx)
+    since_whole_ = whole_interval_;
 }
 
 } // namespace pickdetect

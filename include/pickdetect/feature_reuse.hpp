@@ -31,10 +31,13 @@ struct ReuseStats {
 /// threshold). An instance of the last frame under changed blocks that moved rigidly (a belt;
 /// ECC on its outline's pixels, at least 0.95 correlation) carries its keypoints and their
 /// matches along by the sub-pixel shift measured; the blocks it left and came to are
-/// explained. Around the changed blocks nothing explains (objects coming into view, taken away,
-/// turned), SIFT runs on crops wide enough that the keypoints it gives there are those of the
-/// whole frame, and every keypoint whose descriptor reaches into such a block is replaced. The
-/// matching runs on the new keypoints only; voting, poses, look-alikes and occlusion run on all
+/// explained. When the instances moved together (a belt), the motion blur they carry is
+/// measured on one of them (its model's picture blurred along the motion against the frame)
+/// and undone (Wiener deconvolution along the motion) on every frame SIFT runs on after: a
+/// whole frame and the crops. Around the changed blocks nothing explains (objects coming into view,
+/// taken away, turned), SIFT runs on crops wide enough that the keypoints it gives there are those
+/// of the whole frame, and every keypoint whose descriptor reaches into such a block is replaced.
+/// The matching runs on the new keypoints only; voting, poses, look-alikes and occlusion run on all
 /// of them, on the frame's pixels. A frame in which nothing changed gets the last detection.
 /// Every `whole_interval`-th frame, a frame of another size, contrast threshold, detector or
 /// settings, ORB and detection-scale < 1 are detected whole, exactly as Detector::detect does.
@@ -58,6 +61,12 @@ public:
 private:
   Detection detect_whole(const Detector& detector, const cv::Mat& grey, const cv::Mat& colour,
                          const Settings& settings, double contrast);
+  /// The motion blur a frame carries along the belt (frame pixels), when both are known.
+  cv::Point2f belt_blur() const;
+  /// The belt's step and the exposure, from the instances that moved by `shifts` (each with
+  /// its pose in this frame) on `grey`.
+  void measure_belt(const Detector& detector, const cv::Mat& grey,
+                    const std::vector<std::pair<const Instance*, cv::Point2f>>& shifts);
   bool same_run(const Detector& detector, const cv::Mat& grey, const Settings& settings,
                 double contrast) const;
 
@@ -80,6 +89,12 @@ private:
     std::optional<cv::Point2f> since_whole;
   };
   std::vector<Motion> motions_;
+  /// The belt's motion in the last frame (frame pixels), when the instances that moved there
+  /// moved together.
+  std::optional<cv::Point2f> belt_step_;
+  /// The shutter's share of the frame time: the motion blur's length over the belt's step,
+  /// measured on the instances the belt carries (once after each whole frame).
+  std::optional<double> exposure_;
   ReuseStats last_;
 };
 

@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// The belt's motion blur: its length measured on an instance against its model's picture, and
+// undone along any direction.
+#include "../support/box.hpp"
+#include "common/scene.hpp"
+#include "motion_blur.hpp"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+
+using namespace pickdetect;
+using pickdetect::test_scene::Pose;
+
+namespace {
+
+const cv::Size kSize(640, 480);
+
+/// The box at `pose` on a textured belt, blurred along `step`'s direction by a box of `length`
+/// pixels (a line kernel sampled finely), with sensor noise.
+cv::Mat blurred_scene(const Pose& pose, const cv::Point2f& step, double length) {
+  cv::Mat scene = test_scene::smooth_noise_background(kSize, 5);
+  test_scene::paste(scene, test_scene::box_model().image, {pose});
+  if (length > 0.0) {
+    const double n = std::hypot(step.x, step.y);
+    const int r = static_cast<int>(std::ceil(length / 2)) + 1;
+    cv::Mat kernel = cv::Mat::zeros(2 * r + 1, 2 * r + 1, CV_32F);
+    const int samples = 400;
+    for (int i = 0; i < samples; ++i) {
+      const double t = (i + 0.5) / samples * length - length / 2;
+      kernel.at<float>(cvRound(r + t * step.y / n), cvRound(r + t * step.x / n)) += 1.f / samples;
+    }
+    cv::filter2D(scene, scene, -1, kernel);
+  }
+  cv::Mat noise(kSize, CV_16SC1), wide;
+  cv::RNG(7).fill(noise, cv::RNG::NORMAL, 0, 2);
+  scene.convertTo(wide, CV_16SC1);
+  cv::Mat(wide + noise).convertTo(scene, CV_8UC1);
+  return scene;
+}
+
+cv::Matx33d homography_of(const Pose& pose) {
+  const cv::Matx23d a = test_scene::model_to_scene(test_scene::box_model().image.size(), pose);
+  return {a(0, 0), a(0, 1), a(0, 2), a(1, 0), a(1, 1), a(1, 2), 0, 0, 1};
+}
+
+TEST(MotionBlur, LengthIsMeasuredAlongTheBeltWithinAPixel) {
+  const Pose pose{{320.f, 240.f}, 25.0, 0.8};
+  for (const cv::Point2f step :
+       {cv::Point2f(25.f, 0.f), cv::Point2f(0.f, 20.f), cv::Point2f(14.f, -14.f)}) {
+    const double longest = std::hypot(step.x, step.y);
+    for (const double length : {0.0, 0.3 * longest, 0.5 * longest, 0.9 * longest}) {
+      const std::optional<double> got = detail::measure_blur_length(
+          blurred_scene(pose, step, length), test_scene::box_model(), homography_of(pose), step);
+      ASSERT_TRUE(got.has_value()) << "step (" << step.x << ", " << step.y << "), " << length;
+      EXPECT_NEAR(*got, length, 1.0) << "step (" << step.x << ", " << step.y << ")";
+    }
+  }
+}
+
+TEST(MotionBlur, UndoingTheBlurBringsTheSharpPictureBack) {
+  const Pose pose{{320.f, 240.f}, 25.0, 0.8};
+  const cv::Mat sharp = blurred_scene(pose, cv::Point2f(1.f, 0.f), 0.0);
+  const cv::Rect inside(120, 100, 400, 280);
+  for (const cv::Point2f blur :
+       {cv::Point2f(12.f, 0.f), cv::Point2f(0.f, 12.f), cv::Point2f(-8.5f, 8.5f)}) {
+    const cv::Mat blurred = blurred_scene(pose, blur, std::hypot(blur.x, blur.y));
+    const cv::Mat undone = detail::undo_motion_blur(blurred, blur);
+    const double before = cv::norm(blurred(inside), sharp(inside), cv::NORM_L2);
+    const double after = cv::norm(undone(inside), sharp(inside), cv::NORM_L2);
+    EXPECT_LT(after, 0.75 * before) << "blur (" << blur.x << ", " << blur.y << ")";
+  }
+  // Shorter than SIFT's own smoothing: left as it is.
+  const cv::Mat slight = blurred_scene(pose, cv::Point2f(1.f, 0.f), 1.5);
+  EXPECT_EQ(
+      cv::norm(detail::undo_motion_blur(slight, cv::Point2f(1.5f, 0.f)), slight, cv::NORM_INF),
+      0.0);
+}
+
+} // namespace
