@@ -2,6 +2,7 @@
 // Detection that reuses the last frame's keypoints and matches where the picture did not change.
 #include <pickdetect/feature_reuse.hpp>
 
+#include "median.hpp"
 #include "motion_blur.hpp"
 #include "stopwatch.hpp"
 
@@ -38,6 +39,7 @@ constexpr int kCropAlign = 32;
 constexpr double kContrastDrift = 0.02;
 
 using detail::Clock;
+using detail::median;
 using detail::ms_since;
 
 double reach(const cv::KeyPoint& k) {
@@ -132,11 +134,6 @@ constexpr double kBeltAgreePx = 1.0;
 constexpr double kLeastBeltStep = 2.0;
 /// The blur is measured on at most this many of the instances the belt carries.
 constexpr size_t kBlurMeasured = 3;
-
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
 
 cv::Rect box_of(const std::vector<cv::Point2f>& outline) {
   return cv::boundingRect(outline);

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 #include "foreign_cover.hpp"
 
+#include "median.hpp"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -43,14 +45,6 @@ struct CellLook {
   bool detail_over_plain = false;
   double detail_f = 0, detail_m = 0, correlation = 0, level_f = 0, level_m = 0;
 };
-
-double median(std::vector<double> v) {
-  if (v.empty())
-    return NAN;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 std::vector<cv::Point> mapped(const std::vector<cv::Point2f>& outline, const cv::Matx33d& map) {
   std::vector<cv::Point> out;

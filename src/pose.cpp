@@ -2,6 +2,8 @@
 // Poses: similarity transforms, their least-squares fit (Umeyama, Eigen) and angle arithmetic.
 #include <pickdetect/pose.hpp>
 
+#include "median.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
@@ -42,9 +44,7 @@ bool valid_weights(const std::vector<double>& weights, size_t n) {
 /// Cauchy weights of `residuals` (any unit; `min_sigma` in the same), times `base` if given.
 std::vector<double> cauchy_weights(const std::vector<double>& residuals, double min_sigma,
                                    const std::vector<double>& base) {
-  std::vector<double> sorted = residuals;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  const double sigma = std::max(min_sigma, 1.4826 * sorted[sorted.size() / 2]);
+  const double sigma = std::max(min_sigma, 1.4826 * detail::median(residuals));
   std::vector<double> w(residuals.size());
   for (size_t k = 0; k < residuals.size(); ++k) {
     const double u = residuals[k] / (kCauchyK * sigma);

@@ -3,6 +3,8 @@
 #include <pickdetect/error.hpp>
 #include <pickdetect/tracker.hpp>
 
+#include "median.hpp"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -66,11 +68,6 @@ double angle_difference(double a, double b) {
 
 bool inside(cv::Point2d p, cv::Size frame) {
   return p.x >= 0.0 && p.y >= 0.0 && p.x < frame.width && p.y < frame.height;
-}
-
-double median(std::vector<double> v) {
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
 }
 
 } // namespace
@@ -303,7 +300,7 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
   }
   CommonMotion motion;
   if (static_cast<int>(velocities.size()) >= settings_.common_motion_min_tracks) {
-    const cv::Point2d m(median(vx), median(vy));
+    const cv::Point2d m(detail::median(vx), detail::median(vy));
     const double tolerance =
         std::max(settings_.common_motion_slack, settings_.common_motion_tolerance * cv::norm(m));
     cv::Point2d sum;

@@ -3,6 +3,7 @@
 // (and scaling) given by its two keypoints.
 #include <pickdetect/voting.hpp>
 
+#include "median.hpp"
 #include "model_scene.hpp"
 
 #include <algorithm>
@@ -67,10 +68,8 @@ bool pose_from_principal_points(const ModelScene& ms, const std::vector<int>& me
     angles.push_back(ms.votes[i].angle);
     scales.push_back(ms.votes[i].scale);
   }
-  std::nth_element(angles.begin(), angles.begin() + angles.size() / 2, angles.end());
-  std::nth_element(scales.begin(), scales.begin() + scales.size() / 2, scales.end());
-  pose.angle = angles[angles.size() / 2];
-  pose.scale = scales[scales.size() / 2];
+  pose.angle = detail::median(angles);
+  pose.scale = detail::median(scales);
   const cv::Point2f at =
       Similarity{pose.angle, pose.scale, {0, 0}}.apply(ms.model.principal_points[0]);
   pose.translation = cv::Point2d(modes[0].x - at.x, modes[0].y - at.y);
