@@ -2,6 +2,7 @@
 #include "foreign_cover.hpp"
 
 #include "median.hpp"
+#include "object_mask.hpp"
 
 #include <opencv2/imgproc.hpp>
 
@@ -92,9 +93,8 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
   cv::warpPerspective(model.image, picture, cv::Mat(to_box), size, cv::INTER_LINEAR,
                       cv::BORDER_REPLICATE);
   // A model without a mask is all object.
-  const cv::Mat object =
-      model.mask.empty() ? cv::Mat(model.image.size(), CV_8UC1, cv::Scalar(255)) : model.mask;
-  cv::warpPerspective(object, mask, cv::Mat(to_box), size, cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+  cv::warpPerspective(object_mask(model.mask, model.image.size()), mask, cv::Mat(to_box), size,
+                      cv::INTER_NEAREST, cv::BORDER_CONSTANT);
   for (const Instance* other : above)
     if (other->outline.size() >= 3)
       cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{mapped(other->outline, to_small)},
@@ -143,15 +143,13 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
     CellLook& l = looks[i];
     const double mf = s.f / s.n, mm = s.m / s.n;
     const double vf = std::max(0.0, s.ff / s.n - mf * mf), vm = s.mm / s.n - mm * mm;
+    l.detail_f = std::sqrt(vf);
+    l.detail_m = std::sqrt(std::max(0.0, vm));
     if (!(vm >= kMinCellTexture * kMinCellTexture)) {
-      l.detail_f = std::sqrt(vf);
-      l.detail_m = std::sqrt(std::max(0.0, vm));
       l.detail_over_plain = l.detail_f >= kMinDetailOverPlain;
       continue;
     }
     l.compared = true;
-    l.detail_f = std::sqrt(vf);
-    l.detail_m = std::sqrt(vm);
     l.level_f = s.lf / s.n;
     l.level_m = s.lm / s.n;
     if (l.detail_f < kMinFrameTexture)

@@ -3,6 +3,8 @@
 // simulated tilts (ASIFT's view simulation), each view's keypoints carried back to the picture.
 #include <pickdetect/features.hpp>
 
+#include "object_mask.hpp"
+
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -47,8 +49,8 @@ Features features_of_view(const cv::Mat& grey, const cv::Mat& mask, const Tilted
   a(1, 2) = -box.y;
   cv::Mat turned, turned_mask;
   cv::warpAffine(grey, turned, a, box.size(), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
-  const cv::Mat object = mask.empty() ? cv::Mat(grey.size(), CV_8UC1, cv::Scalar(255)) : mask;
-  cv::warpAffine(object, turned_mask, a, box.size(), cv::INTER_NEAREST, cv::BORDER_CONSTANT);
+  cv::warpAffine(detail::object_mask(mask, grey.size()), turned_mask, a, box.size(),
+                 cv::INTER_NEAREST, cv::BORDER_CONSTANT);
   cv::GaussianBlur(turned, turned, cv::Size(0, 0),
                    kAntiAliasSigma * std::sqrt(view.tilt * view.tilt - 1.0), 0.01);
   cv::Mat squeezed, squeezed_mask;
