@@ -2,11 +2,15 @@
 // The motion blur of a moving belt: its length measured on an instance, undone before SIFT.
 #include "motion_blur.hpp"
 
+#include "object_mask.hpp"
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 namespace pickdetect::detail {
 namespace {
@@ -141,10 +145,8 @@ std::optional<double> measure_blur_length(const cv::Mat& grey, const Model& mode
   cv::Mat picture, mask;
   cv::warpPerspective(model.image, picture, to_window, box.size(), cv::INTER_LINEAR,
                       cv::BORDER_REPLICATE);
-  const cv::Mat& object_mask =
-      model.mask.empty() ? cv::Mat(model.image.size(), CV_8UC1, cv::Scalar(255)) : model.mask;
-  cv::warpPerspective(object_mask, mask, to_window, box.size(), cv::INTER_NEAREST,
-                      cv::BORDER_CONSTANT, cv::Scalar(0));
+  cv::warpPerspective(object_mask(model.mask, model.image.size()), mask, to_window, box.size(),
+                      cv::INTER_NEAREST, cv::BORDER_CONSTANT, cv::Scalar(0));
   // Off the rim, where the belt around the object blurs in, by the longest blur and more.
   cv::erode(mask, mask,
             cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * margin + 1, 2 * margin + 1)));
@@ -168,12 +170,17 @@ std::optional<double> measure_blur_length(const cv::Mat& grey, const Model& mode
   // own (round) blur and the light change little. The longer the blur, the more it streaks:
   // the length is found by halving the span it lies in.
   const double wanted = streak(seen, direction, mask);
+  std::vector<std::pair<double, cv::Mat>> tried; // Each length's blur, made once.
   auto blurred_by = [&](double length) {
-    cv::Mat blurred; // Not in place: each length blurs the drawn picture afresh.
     if (length < 1.0)
       return drawn;
+    for (const auto& [l, blurred] : tried)
+      if (l == length)
+        return blurred;
+    cv::Mat blurred; // Not in place: each length blurs the drawn picture afresh.
     cv::filter2D(drawn, blurred, -1, line_kernel(direction, length), cv::Point(-1, -1), 0,
                  cv::BORDER_REPLICATE);
+    tried.emplace_back(length, blurred);
     return blurred;
   };
   double shorter = 0.0, longer = longest;
