@@ -6,6 +6,7 @@
 #include "motion_blur.hpp"
 #include "stopwatch.hpp"
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
 
@@ -306,40 +307,50 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
     return cv::Rect(tl, br) & blocks;
   };
   const cv::Rect frame(cv::Point(0, 0), grey.size());
-  for (size_t n = 0; n < detection_.instances.size(); ++n) {
-    const Instance& instance = detection_.instances[n];
-    const cv::Rect before = box_of(instance.outline) & frame;
-    if (cv::countNonZero(changed(block_box(before))) == 0)
-      continue; // Still: its keypoints stay as they are.
-    if (!in_view(instance, grey.size()))
-      continue; // Its blocks are extracted again.
-    // Measured from the whole frame its keypoints came from when it was followed from there,
-    // so that the small errors of each step do not add up; else from the last frame.
-    const Motion& motion = motions_[n];
-    cv::Point2f shift, total;
-    std::optional<cv::Point2f> since_whole;
-    if (motion.since_whole && motion.step) {
-      std::vector<cv::Point2f> there = instance.outline;
-      for (cv::Point2f& p : there)
-        p -= *motion.since_whole;
-      if (ecc_shift(whole_grey_, grey, there, *motion.since_whole + *motion.step, kPredictedMargin,
-                    total)) {
-        shift = total - *motion.since_whole;
-        since_whole = total;
-      }
-    }
-    if (!since_whole) {
-      if (!step_shift(last_grey_, grey, instance, motion.step, shift))
+  // Each instance's motion, followed on its own pixels: the instances in parallel (ECC is most
+  // of a belt frame's cost), each into its own slot, gathered in order below.
+  std::vector<std::optional<Moved>> follow(detection_.instances.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(follow.size())), [&](const cv::Range& range) {
+    for (int i = range.start; i < range.end; ++i) {
+      const size_t n = static_cast<size_t>(i);
+      const Instance& instance = detection_.instances[n];
+      const cv::Rect before = box_of(instance.outline) & frame;
+      if (cv::countNonZero(changed(block_box(before))) == 0)
+        continue; // Still: its keypoints stay as they are.
+      if (!in_view(instance, grey.size()))
         continue; // Its blocks are extracted again.
-      if (motion.since_whole)
-        since_whole = *motion.since_whole + shift;
+      // Measured from the whole frame its keypoints came from when it was followed from there,
+      // so that the small errors of each step do not add up; else from the last frame.
+      const Motion& motion = motions_[n];
+      cv::Point2f shift, total;
+      std::optional<cv::Point2f> since_whole;
+      if (motion.since_whole && motion.step) {
+        std::vector<cv::Point2f> there = instance.outline;
+        for (cv::Point2f& p : there)
+          p -= *motion.since_whole;
+        if (ecc_shift(whole_grey_, grey, there, *motion.since_whole + *motion.step,
+                      kPredictedMargin, total)) {
+          shift = total - *motion.since_whole;
+          since_whole = total;
+        }
+      }
+      if (!since_whole) {
+        if (!step_shift(last_grey_, grey, instance, motion.step, shift))
+          continue; // Its blocks are extracted again.
+        if (motion.since_whole)
+          since_whole = *motion.since_whole + shift;
+      }
+      // What was in view moved to `after`; what comes into view beside it is extracted.
+      const cv::Rect after = (before + cv::Point(cvRound(shift.x), cvRound(shift.y))) & frame;
+      follow[n] = Moved{&instance, shift, before, after, since_whole};
     }
-    // What was in view moved to `after`; what comes into view beside it is extracted.
-    const cv::Rect after = (before + cv::Point(cvRound(shift.x), cvRound(shift.y))) & frame;
-    moved.push_back({&instance, shift, before, after, since_whole});
-    explained(block_box(before)).setTo(255);
-    explained(block_box(after)).setTo(255);
-  }
+  });
+  for (const std::optional<Moved>& m : follow)
+    if (m) {
+      moved.push_back(*m);
+      explained(block_box(m->before)).setTo(255);
+      explained(block_box(m->after)).setTo(255);
+    }
   const cv::Mat unexplained = changed & (explained == 0);
   std::vector<std::pair<const Instance*, cv::Point2f>> shifts;
   for (const Moved& m : moved)
