@@ -8,6 +8,7 @@
 #include "foreign_cover.hpp"
 #include "polygon.hpp"
 
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -84,6 +85,43 @@ double correlation(const Instance& inst, const Model& model, const cv::Mat& grey
     return -1.0;
   cv::Mat product = (frame - mf[0]).mul(model_pixels - mm[0]);
   return cv::mean(product, mask)[0] / (sf[0] * sm[0]);
+}
+
+/// Whether instance `i` is covered and pickable, and how much of it is seen: `above` the
+/// instances lying on it, `hidden` the area they hide, `area` its own (pixels). Writes only
+/// instance `i`, reads the others' outlines.
+void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Model>& models,
+                const cv::Rect& frame, const cv::Mat& grey, const std::vector<size_t>& above,
+                double hidden, double area) {
+  Instance& inst = instances[i];
+  inst.covered = area <= 0.0 || hidden > kCoverTolerance * area;
+  if (!inst.covered && !grey.empty()) {
+    std::vector<const Instance*> on_it;
+    for (size_t j : above)
+      on_it.push_back(&instances[j]);
+    inst.covered = detail::foreign_cover_cells(inst, models[inst.model], grey, on_it) >=
+                   detail::kMinForeignCells;
+  }
+  inst.visibility = 0.0;
+  const cv::Rect box = cv::boundingRect(inst.outline) & frame;
+  if (area > 0.0 && box.area() > 0) {
+    cv::Mat seen = cv::Mat::zeros(box.size(), CV_8UC1);
+    auto fill = [&](const std::vector<cv::Point2f>& outline, uchar value) {
+      std::vector<cv::Point> polygon;
+      for (const cv::Point2f& p : outline)
+        polygon.emplace_back(cvRound(p.x - box.x), cvRound(p.y - box.y));
+      cv::fillPoly(seen, std::vector<std::vector<cv::Point>>{polygon}, cv::Scalar(value));
+    };
+    fill(inst.outline, 255);
+    for (size_t j : above)
+      fill(instances[j].outline, 0);
+    inst.visibility = std::min(1.0, cv::countNonZero(seen) / area);
+  }
+  const bool grasp_in_frame = inst.grasp.x >= kGraspMarginPx && inst.grasp.y >= kGraspMarginPx &&
+                              inst.grasp.x < frame.width - kGraspMarginPx &&
+                              inst.grasp.y < frame.height - kGraspMarginPx;
+  inst.pickable = !inst.covered && grasp_in_frame && inst.visibility >= kMinPickableVisibility;
+  inst.pick_order = 0;
 }
 
 } // namespace
@@ -194,37 +232,12 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
     }
 
   const cv::Rect frame(0, 0, frame_size.width, frame_size.height);
-  for (size_t i = 0; i < n; ++i) {
-    Instance& inst = instances[i];
-    inst.covered = area[i] <= 0.0 || hidden[i] > kCoverTolerance * area[i];
-    if (!inst.covered && !grey.empty()) {
-      std::vector<const Instance*> on_it;
-      for (size_t j : above[i])
-        on_it.push_back(&instances[j]);
-      inst.covered = detail::foreign_cover_cells(inst, models[inst.model], grey, on_it) >=
-                     detail::kMinForeignCells;
-    }
-    inst.visibility = 0.0;
-    const cv::Rect box = cv::boundingRect(inst.outline) & frame;
-    if (area[i] > 0.0 && box.area() > 0) {
-      cv::Mat seen = cv::Mat::zeros(box.size(), CV_8UC1);
-      auto fill = [&](const std::vector<cv::Point2f>& outline, uchar value) {
-        std::vector<cv::Point> polygon;
-        for (const cv::Point2f& p : outline)
-          polygon.emplace_back(cvRound(p.x - box.x), cvRound(p.y - box.y));
-        cv::fillPoly(seen, std::vector<std::vector<cv::Point>>{polygon}, cv::Scalar(value));
-      };
-      fill(inst.outline, 255);
-      for (size_t j : above[i])
-        fill(instances[j].outline, 0);
-      inst.visibility = std::min(1.0, cv::countNonZero(seen) / area[i]);
-    }
-    const bool grasp_in_frame = inst.grasp.x >= kGraspMarginPx && inst.grasp.y >= kGraspMarginPx &&
-                                inst.grasp.x < frame_size.width - kGraspMarginPx &&
-                                inst.grasp.y < frame_size.height - kGraspMarginPx;
-    inst.pickable = !inst.covered && grasp_in_frame && inst.visibility >= kMinPickableVisibility;
-    inst.pick_order = 0;
-  }
+  // Each instance on its own (the instances in parallel): it reads only the others' outlines.
+  cv::parallel_for_(cv::Range(0, static_cast<int>(n)), [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k)
+      assess_one(instances, static_cast<size_t>(k), models, frame, grey, above[k], hidden[k],
+                 area[k]);
+  });
 
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
