@@ -17,6 +17,7 @@
 #include <pickdetect/voting.hpp>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -56,6 +57,49 @@ void check_frames(const cv::Mat& grey, const cv::Mat& colour) {
     throw Error("frames must be 8-bit single-channel (grey) pictures");
   if (!colour.empty() && (colour.type() != CV_8UC3 || colour.size() != grey.size()))
     throw Error("the colour frame must be 8-bit BGR (CV_8UC3) of the grey frame's size");
+}
+
+/// The instances of model `m` (`model`) among the frame's features and their matches.
+std::vector<Instance> find_instances(const Model& model, int m, const Features& scene,
+                                     const std::vector<Match>& matches, const Settings& s) {
+  detail::ModelScene ms{
+      model, model.features(s.features).keypoints, m, scene.keypoints, {}, {}, 0.0, {}};
+  for (const Match& match : matches)
+    if (match.model == m)
+      ms.matches.push_back(match);
+  if (static_cast<int>(ms.matches.size()) < std::max(1, s.min_matches))
+    return {};
+  detail::index_matches(ms);
+  ms.votes = cast_votes(ms.matches, ms.model_keypoints, scene.keypoints, ms.model.principal_points,
+                        s.allow_scale);
+  ms.bandwidth =
+      s.bandwidth > 0.0 ? s.bandwidth : kAutoBandwidthShare * detail::model_side(ms.model);
+
+  std::vector<Instance> found;
+  switch (s.method) {
+  case Method::Voting:
+    found = detail::find_by_voting(ms, s);
+    break;
+  case Method::RansacClustered:
+    found = detail::find_by_ransac(ms, s, true);
+    break;
+  case Method::RansacAll:
+    found = detail::find_by_ransac(ms, s, false);
+    break;
+  }
+  std::vector<Instance> out;
+  for (Instance& inst : found) {
+    if (!finite_instance(inst))
+      continue;
+    inst.model = m;
+    inst.model_name = ms.model.name;
+    inst.view = ms.model.view;
+    inst.score = score_for(inst.matches);
+    inst.grasp = inst.points[ms.model.grasp_point];
+    inst.grasp_angle = inst.angle;
+    out.push_back(std::move(inst));
+  }
+  return out;
 }
 
 } // namespace
@@ -191,50 +235,17 @@ Detection Detector::detect_matched(const Features& scene, const std::vector<Matc
   result.matches = static_cast<int>(matches.size());
   const bool share = s.method == Method::Voting && s.refine;
   const auto t = Clock::now();
-  for (size_t m = 0; m < models_.size(); ++m) {
-    detail::ModelScene ms{models_[m],
-                          models_[m].features(s.features).keypoints,
-                          static_cast<int>(m),
-                          scene.keypoints,
-                          {},
-                          {},
-                          0.0,
-                          {}};
-    for (const Match& match : matches)
-      if (match.model == static_cast<int>(m))
-        ms.matches.push_back(match);
-    if (static_cast<int>(ms.matches.size()) < std::max(1, s.min_matches))
-      continue;
-    detail::index_matches(ms);
-    ms.votes = cast_votes(ms.matches, ms.model_keypoints, scene.keypoints,
-                          ms.model.principal_points, s.allow_scale);
-    ms.bandwidth =
-        s.bandwidth > 0.0 ? s.bandwidth : kAutoBandwidthShare * detail::model_side(ms.model);
-
-    std::vector<Instance> found;
-    switch (s.method) {
-    case Method::Voting:
-      found = detail::find_by_voting(ms, s);
-      break;
-    case Method::RansacClustered:
-      found = detail::find_by_ransac(ms, s, true);
-      break;
-    case Method::RansacAll:
-      found = detail::find_by_ransac(ms, s, false);
-      break;
-    }
-    for (Instance& inst : found) {
-      if (!finite_instance(inst))
-        continue;
-      inst.model = static_cast<int>(m);
-      inst.model_name = ms.model.name;
-      inst.view = ms.model.view;
-      inst.score = score_for(inst.matches);
-      inst.grasp = inst.points[ms.model.grasp_point];
-      inst.grasp_angle = inst.angle;
+  // Each model's instances on their own (the models in parallel), gathered in the models'
+  // order: the result does not depend on the threads.
+  std::vector<std::vector<Instance>> per_model(models_.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(models_.size())), [&](const cv::Range& range) {
+    for (int m = range.start; m < range.end; ++m)
+      per_model[static_cast<size_t>(m)] =
+          find_instances(models_[static_cast<size_t>(m)], m, scene, matches, s);
+  });
+  for (std::vector<Instance>& found : per_model)
+    for (Instance& inst : found)
       result.instances.push_back(std::move(inst));
-    }
-  }
   if (share) {
     const int fewest = std::max(1, s.min_matches);
     // Look-alikes that differ in colour share every feature: the frame's colour names them
