@@ -3,6 +3,8 @@
 
 #include <pickdetect/error.hpp>
 
+#include "file_storage_writing.hpp"
+
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -235,13 +237,7 @@ Calibration load_calibration(const std::string& path) {
 
 void save_calibration(const Calibration& c, const std::string& path) {
   cv::FileStorage store;
-  try {
-    store.open(path, cv::FileStorage::WRITE);
-  } catch (const cv::Exception& e) {
-    throw Error("calibration file " + in_quotes(path) + " cannot be written: " + e.err);
-  }
-  if (!store.isOpened())
-    throw Error("calibration file " + in_quotes(path) + " cannot be written");
+  detail::open_for_writing(store, path, "calibration file");
   const bool camera = c.kind == CalibrationKind::CameraPlane;
   store.writeComment("pickdetect calibration (docs/robot-output.md): plane coordinates in mm, "
                      "origin and axes as the calibration set them");

@@ -4,6 +4,8 @@
 #include <pickdetect/features.hpp>
 #include <pickdetect/model.hpp>
 
+#include "file_storage_writing.hpp"
+
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -514,21 +516,11 @@ void write_model(cv::FileStorage& store, const Model& model, const fs::path& fol
   }
 }
 
-void open_for_writing(cv::FileStorage& store, const std::string& path) {
-  try {
-    store.open(path, cv::FileStorage::WRITE);
-  } catch (const cv::Exception& e) {
-    throw Error("model file " + in_quotes(path) + " cannot be written: " + e.err);
-  }
-  if (!store.isOpened())
-    throw Error("model file " + in_quotes(path) + " cannot be written");
-}
-
 } // namespace
 
 void save_model(const Model& model, const std::string& path, bool cache_features) {
   cv::FileStorage store;
-  open_for_writing(store, path);
+  detail::open_for_writing(store, path, "model file");
   store << "name" << model.name;
   if (model.height_mm > 0.0)
     store << "height" << model.height_mm;
@@ -544,7 +536,7 @@ void save_views(const std::vector<Model>& views, const std::string& path, bool c
       throw Error("model file " + in_quotes(path) + ": the views name two products, '" +
                   views.front().name + "' and '" + view.name + "'");
   cv::FileStorage store;
-  open_for_writing(store, path);
+  detail::open_for_writing(store, path, "model file");
   const Model& first = views.front();
   store << "name" << first.name;
   if (first.height_mm > 0.0)
