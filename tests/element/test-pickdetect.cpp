@@ -25,13 +25,11 @@
 #include <string>
 #include <vector>
 
-#ifndef TEST_DATA_DIR
-#error "TEST_DATA_DIR must name the folder holding box.png"
-#endif
-
 namespace {
 
-const std::string kBoxPath = std::string(TEST_DATA_DIR) + "/box.png";
+using pickdetect::test_harness::kBoxPath;
+using pickdetect::test_harness::roi_metas;
+using pickdetect::test_harness::roi_param;
 
 const char* const kFormats[] = {"GRAY8", "RGB",  "BGR",  "RGBx", "BGRx", "xRGB", "xBGR", "RGBA",
                                 "BGRA",  "ARGB", "ABGR", "I420", "YV12", "NV12", "NV21"};
@@ -250,10 +248,6 @@ GST_START_TEST(test_draw_colours) {
 }
 GST_END_TEST;
 
-static const GstStructure* roi_param(GstVideoRegionOfInterestMeta* roi) {
-  return gst_video_region_of_interest_meta_get_param(roi, "pick-instance");
-}
-
 static std::vector<double> double_array(const GstStructure* s, const char* field) {
   const GValue* v = gst_structure_get_value(s, field);
   fail_unless(v != nullptr && GST_VALUE_HOLDS_ARRAY(v), "field %s is not an array", field);
@@ -345,11 +339,8 @@ GST_START_TEST(test_meta_roi_message) {
 
   // One ROI per instance, unique ids, the outline's box, the same numbers.
   std::vector<gint> ids;
-  gpointer state = nullptr;
   guint n_roi = 0;
-  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-             out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-    auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+  for (GstVideoRegionOfInterestMeta* roi : roi_metas(out)) {
     fail_unless_equals_string(g_quark_to_string(roi->roi_type), "box");
     fail_unless(std::find(ids.begin(), ids.end(), roi->id) == ids.end(), "duplicate ROI id");
     ids.push_back(roi->id);
@@ -761,11 +752,8 @@ GST_START_TEST(test_look_alike_models) {
                 "variant at (%.1f, %.1f)", var->center_x, var->center_y);
 
     // The ROI metas name the same model as the instance at their centre.
-    gpointer state = nullptr;
     guint n_roi = 0;
-    while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-               out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-      auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+    for (GstVideoRegionOfInterestMeta* roi : roi_metas(out)) {
       const GstStructure* s = roi_param(roi);
       double cx = 0, cy = 0;
       fail_unless(gst_structure_get_double(s, "center-x", &cx) &&
@@ -865,11 +853,8 @@ GST_START_TEST(test_views_of_one_product) {
     fail_unless(in != nullptr);
     fail_unless_equals_string(in->view_name, k == 0 ? "front" : "variant");
   }
-  gpointer state = nullptr;
   int rois = 0;
-  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-             out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-    auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+  for (GstVideoRegionOfInterestMeta* roi : roi_metas(out)) {
     fail_unless_equals_string(g_quark_to_string(roi->roi_type), "carton");
     const GstStructure* s = roi_param(roi);
     double x = 0, y = 0;
@@ -1133,9 +1118,7 @@ GST_END_TEST;
 
 static Suite* pickdetect_suite(void) {
   Suite* s = suite_create("pickdetect");
-  TCase* tc = tcase_create("element");
-  tcase_set_timeout(tc, 600);
-  suite_add_tcase(s, tc);
+  TCase* tc = pickdetect::test_harness::add_tcase(s, "element", 600);
   tcase_add_test(tc, test_model_errors);
   tcase_add_test(tc, test_meta_roi_message);
   tcase_add_test(tc, test_formats_same_instances);
