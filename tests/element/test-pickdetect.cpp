@@ -678,6 +678,24 @@ static std::string write_variant(const std::string& dir) {
   return path;
 }
 
+/// The box at kPoses[0] and the variant (see write_variant) at kPoses[1], in a 640x480 grey
+/// scene.
+static cv::Mat box_and_variant_scene(const std::string& variant_path) {
+  cv::Mat scene = make_scene(cv::Size(640, 480), nullptr, false);
+  paste(scene, box_model().image, kPoses[0]);
+  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
+  return scene;
+}
+
+/// A harness around pickdetect (the box model, then `model` set before the start) taking GRAY8
+/// frames of `size`.
+static GstHarness* gray_harness(const std::string& model, cv::Size size) {
+  GstHarness* h = pickdetect_harness();
+  g_object_set(h->element, "model", model.c_str(), nullptr);
+  gst_harness_set_src_caps_str(h, caps_string("GRAY8", size).c_str());
+  return h;
+}
+
 /// A temporary folder, removed with what is in it.
 struct TempDir {
   std::string path;
@@ -786,9 +804,7 @@ GST_START_TEST(test_add_remove_model_while_playing) {
   TempDir dir;
   const std::string variant_path = write_variant(dir.path);
   const cv::Size size(640, 480);
-  cv::Mat scene = make_scene(size, nullptr, false);
-  paste(scene, box_model().image, kPoses[0]);
-  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
+  const cv::Mat scene = box_and_variant_scene(variant_path);
 
   GstHarness* h = pickdetect_harness();
   gst_harness_set_src_caps_str(h, caps_string("GRAY8", size).c_str());
@@ -839,12 +855,8 @@ GST_START_TEST(test_views_of_one_product) {
                            kBoxPath + "\"\n  - image: variant.png\n")
                               .c_str(),
                           -1, nullptr));
-  cv::Mat scene = make_scene(cv::Size(640, 480), nullptr, false);
-  paste(scene, box_model().image, kPoses[0]);
-  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
-  GstHarness* h = pickdetect_harness();
-  g_object_set(h->element, "model", carton.c_str(), nullptr);
-  gst_harness_set_src_caps_str(h, caps_string("GRAY8", cv::Size(640, 480)).c_str());
+  const cv::Mat scene = box_and_variant_scene(variant_path);
+  GstHarness* h = gray_harness(carton, scene.size());
   GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
   const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
   fail_unless(model_names(meta) == std::vector<std::string>({"carton", "carton"}));
@@ -956,12 +968,8 @@ GST_START_TEST(test_model_set_file) {
       set_path.c_str(), ("%YAML:1.0\nmodels:\n  - \"" + kBoxPath + "\"\n  - variant.png\n").c_str(),
       -1, nullptr));
 
-  cv::Mat scene = make_scene(cv::Size(640, 480), nullptr, false);
-  paste(scene, box_model().image, kPoses[0]);
-  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
-  GstHarness* h = pickdetect_harness();
-  g_object_set(h->element, "model", set_path.c_str(), nullptr);
-  gst_harness_set_src_caps_str(h, caps_string("GRAY8", cv::Size(640, 480)).c_str());
+  const cv::Mat scene = box_and_variant_scene(variant_path);
+  GstHarness* h = gray_harness(set_path, scene.size());
   GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
   fail_unless(model_names(gst_buffer_get_pickdetect_meta(out)) ==
               std::vector<std::string>({"box", "variant"}));
