@@ -705,6 +705,12 @@ struct TempDir {
     path = dir;
     g_free(dir);
   }
+  /// Writes `text` to the file `name` in the folder; returns its path.
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::string file = path + "/" + name;
+    fail_unless(g_file_set_contents(file.c_str(), text.c_str(), -1, nullptr));
+    return file;
+  }
   ~TempDir() {
     if (GDir* d = g_dir_open(path.c_str(), 0, nullptr)) {
       while (const gchar* name = g_dir_read_name(d))
@@ -848,13 +854,9 @@ GST_END_TEST;
 GST_START_TEST(test_views_of_one_product) {
   TempDir dir;
   const std::string variant_path = write_variant(dir.path);
-  const std::string carton = dir.path + "/carton.yml";
-  fail_unless(
-      g_file_set_contents(carton.c_str(),
-                          ("%YAML:1.0\nname: carton\nviews:\n  - name: front\n    image: \"" +
-                           kBoxPath + "\"\n  - image: variant.png\n")
-                              .c_str(),
-                          -1, nullptr));
+  const std::string carton =
+      dir.write("carton.yml", "%YAML:1.0\nname: carton\nviews:\n  - name: front\n    image: \"" +
+                                  kBoxPath + "\"\n  - image: variant.png\n");
   const cv::Mat scene = box_and_variant_scene(variant_path);
   GstHarness* h = gray_harness(carton, scene.size());
   GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
@@ -963,10 +965,8 @@ GST_END_TEST;
 GST_START_TEST(test_model_set_file) {
   TempDir dir;
   const std::string variant_path = write_variant(dir.path);
-  const std::string set_path = dir.path + "/products.yml";
-  fail_unless(g_file_set_contents(
-      set_path.c_str(), ("%YAML:1.0\nmodels:\n  - \"" + kBoxPath + "\"\n  - variant.png\n").c_str(),
-      -1, nullptr));
+  const std::string set_path =
+      dir.write("products.yml", "%YAML:1.0\nmodels:\n  - \"" + kBoxPath + "\"\n  - variant.png\n");
 
   const cv::Mat scene = box_and_variant_scene(variant_path);
   GstHarness* h = gray_harness(set_path, scene.size());
@@ -983,16 +983,11 @@ GST_START_TEST(test_model_set_file) {
     fail_unless(std::strstr(err->message, what.c_str()) != nullptr, "%s", err->message);
     g_error_free(err);
   };
-  const std::string missing_set = dir.path + "/missing.yml";
-  fail_unless(
-      g_file_set_contents(missing_set.c_str(), "%YAML:1.0\nmodels: [gone.png]\n", -1, nullptr));
+  const std::string missing_set = dir.write("missing.yml", "%YAML:1.0\nmodels: [gone.png]\n");
   expect_error(missing_set, GST_RESOURCE_ERROR_NOT_FOUND, dir.path + "/gone.png");
-  const std::string empty_set = dir.path + "/empty.yml";
-  fail_unless(g_file_set_contents(empty_set.c_str(), "%YAML:1.0\nmodels: 3\n", -1, nullptr));
+  const std::string empty_set = dir.write("empty.yml", "%YAML:1.0\nmodels: 3\n");
   expect_error(empty_set, GST_RESOURCE_ERROR_SETTINGS, "'models' must be");
-  const std::string nested_set = dir.path + "/nested.yml";
-  fail_unless(
-      g_file_set_contents(nested_set.c_str(), "%YAML:1.0\nmodels: [products.yml]\n", -1, nullptr));
+  const std::string nested_set = dir.write("nested.yml", "%YAML:1.0\nmodels: [products.yml]\n");
   expect_error(nested_set, GST_RESOURCE_ERROR_SETTINGS, "lists another model set");
   // box.png is in the set too: two models named "box".
   expect_error(set_path + "," + kBoxPath, GST_RESOURCE_ERROR_SETTINGS,
