@@ -18,8 +18,9 @@ Output, one line per counted object, then the totals:
     total=7 box=7
 """
 import argparse
-import os
 import sys
+
+from pickdetect_plugin import add_build_dir_argument, init_gstreamer
 
 
 def main():
@@ -29,23 +30,10 @@ def main():
     parser.add_argument("--line", required=True, help="the count line x1,y1,x2,y2 in frame pixels")
     parser.add_argument("--fps", type=int, default=30,
                         help="frames per second of a picture sequence (default: 30)")
-    parser.add_argument("--build-dir", default=os.environ.get("PICKDETECT_BUILD_DIR"),
-                        help="meson build folder holding gst/libgstpickdetect.so")
+    add_build_dir_argument(parser)
     args = parser.parse_args()
 
-    if args.build_dir:
-        plugin_dir = os.path.join(os.path.abspath(args.build_dir), "gst")
-        old = os.environ.get("GST_PLUGIN_PATH")
-        os.environ["GST_PLUGIN_PATH"] = plugin_dir + (os.pathsep + old if old else "")
-
-    import gi
-    gi.require_version("Gst", "1.0")
-    from gi.repository import Gst
-
-    Gst.init(None)
-    if Gst.ElementFactory.find("pickdetect") is None:
-        sys.exit("pickdetect not found: set GST_PLUGIN_PATH=<builddir>/gst or "
-                 "PICKDETECT_BUILD_DIR=<builddir>, or install the plugin (meson install)")
+    Gst = init_gstreamer(args.build_dir)
 
     if "%" in args.input:
         source = ("multifilesrc name=src caps=image/jpeg,framerate=%d/1 ! decodebin" % args.fps

@@ -17,35 +17,17 @@
 # The plugin is found through GST_PLUGIN_PATH=<builddir>/gst (uninstalled) or
 # PICKDETECT_BUILD_DIR=<builddir>, else in GStreamer's plugin folder after `meson install`.
 set -euo pipefail
+# shellcheck source-path=SCRIPTDIR source=robot-output-common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/robot-output-common.sh"
 
 data=/usr/share/doc/opencv-doc/examples/data
 input=${1:-$data/box_in_scene.png}
 model=${2:-$data/box.png}
 frames=${FRAMES:-50}
 
-if [ -n "${PICKDETECT_BUILD_DIR:-}" ]; then
-  export GST_PLUGIN_PATH="$PICKDETECT_BUILD_DIR/gst${GST_PLUGIN_PATH:+:$GST_PLUGIN_PATH}"
-fi
-if ! gst-inspect-1.0 pickdetectjson >/dev/null 2>&1; then
-  echo "pickdetect not found: set GST_PLUGIN_PATH=<builddir>/gst or PICKDETECT_BUILD_DIR=<builddir>" >&2
-  exit 1
-fi
+find_pickdetect
 command -v mosquitto_pub >/dev/null || { echo "mosquitto_pub not found (Debian: mosquitto-clients)" >&2; exit 1; }
-for file in "$input" "$model" ${CALIBRATION:+"$CALIBRATION"}; do
-  [ -r "$file" ] || { echo "cannot read $file" >&2; exit 1; }
-done
-
-case "$input" in
-  *.png|*.PNG|*.jpg|*.JPG|*.jpeg|*.bmp|*.tif|*.tiff)
-    source=(filesrc location="$input" ! decodebin ! imagefreeze num-buffers="$frames" ! videorate !
-            video/x-raw,framerate=10/1) ;;
-  *)
-    source=(filesrc location="$input" ! decodebin) ;;
-esac
-calibration=()
-if [ -n "${CALIBRATION:-}" ]; then
-  calibration=(calibration="$CALIBRATION")
-fi
+read_input_model_calibration "$input" "$model" "$frames"
 
 # gst-launch -q writes nothing else to stdout: stdout is the JSON lines alone.
 gst-launch-1.0 -q -e "${source[@]}" ! videoconvert ! \

@@ -23,6 +23,8 @@ import argparse
 import os
 import sys
 
+from pickdetect_plugin import add_build_dir_argument, init_gstreamer
+
 DATA = "/usr/share/doc/opencv-doc/examples/data"
 PICTURES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
@@ -36,24 +38,13 @@ def main():
                              "by commas (default: OpenCV's box.png)")
     parser.add_argument("--frames", type=int, default=3,
                         help="how many frames to make of a picture (default: 3)")
-    parser.add_argument("--build-dir", default=os.environ.get("PICKDETECT_BUILD_DIR"),
-                        help="meson build folder holding gst/libgstpickdetect.so")
+    add_build_dir_argument(parser)
     args = parser.parse_args()
 
-    if args.build_dir:
-        plugin_dir = os.path.join(os.path.abspath(args.build_dir), "gst")
-        old = os.environ.get("GST_PLUGIN_PATH")
-        os.environ["GST_PLUGIN_PATH"] = plugin_dir + (os.pathsep + old if old else "")
-
+    Gst = init_gstreamer(args.build_dir)
     import gi
-    gi.require_version("Gst", "1.0")
     gi.require_version("GstVideo", "1.0")
-    from gi.repository import GLib, Gst, GstVideo
-
-    Gst.init(None)
-    if Gst.ElementFactory.find("pickdetect") is None:
-        sys.exit("pickdetect not found: set GST_PLUGIN_PATH=<builddir>/gst or "
-                 "PICKDETECT_BUILD_DIR=<builddir>, or install the plugin (meson install)")
+    from gi.repository import GLib, GstVideo
 
     source = "filesrc name=src ! decodebin"
     if args.input.lower().endswith(PICTURES):

@@ -15,6 +15,8 @@
 # The plugin is found through GST_PLUGIN_PATH=<builddir>/gst (uninstalled) or
 # PICKDETECT_BUILD_DIR=<builddir>, else in GStreamer's plugin folder after `meson install`.
 set -euo pipefail
+# shellcheck source-path=SCRIPTDIR source=robot-output-common.sh
+source "$(dirname "${BASH_SOURCE[0]}")/robot-output-common.sh"
 
 data=/usr/share/doc/opencv-doc/examples/data
 output=${1:-annotated.webm}
@@ -24,28 +26,8 @@ frames=${FRAMES:-50}
 host=${HOST:-127.0.0.1}
 port=${PORT:-5555}
 
-if [ -n "${PICKDETECT_BUILD_DIR:-}" ]; then
-  export GST_PLUGIN_PATH="$PICKDETECT_BUILD_DIR/gst${GST_PLUGIN_PATH:+:$GST_PLUGIN_PATH}"
-fi
-if ! gst-inspect-1.0 pickdetectjson >/dev/null 2>&1; then
-  echo "pickdetect not found: set GST_PLUGIN_PATH=<builddir>/gst or PICKDETECT_BUILD_DIR=<builddir>" >&2
-  exit 1
-fi
-for file in "$input" "$model" ${CALIBRATION:+"$CALIBRATION"}; do
-  [ -r "$file" ] || { echo "cannot read $file" >&2; exit 1; }
-done
-
-case "$input" in
-  *.png|*.PNG|*.jpg|*.JPG|*.jpeg|*.bmp|*.tif|*.tiff)
-    source=(filesrc location="$input" ! decodebin ! imagefreeze num-buffers="$frames" ! videorate !
-            video/x-raw,framerate=10/1) ;;
-  *)
-    source=(filesrc location="$input" ! decodebin) ;;
-esac
-calibration=()
-if [ -n "${CALIBRATION:-}" ]; then
-  calibration=(calibration="$CALIBRATION")
-fi
+find_pickdetect
+read_input_model_calibration "$input" "$model" "$frames"
 
 # The TCP branch keeps the clock (sync=true): lines go out as the frames would be shown.
 gst-launch-1.0 -e "${source[@]}" ! videoconvert ! video/x-raw,format=I420 ! \

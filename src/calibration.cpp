@@ -3,6 +3,8 @@
 
 #include <pickdetect/error.hpp>
 
+#include "open_file_storage.hpp"
+
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -164,12 +166,7 @@ Calibration load_calibration(const std::string& path) {
   if (!std::ifstream(path).good())
     throw Error(origin + " cannot be opened for reading");
   cv::FileStorage store;
-  try {
-    if (!store.open(path, cv::FileStorage::READ))
-      throw Error(origin + " cannot be parsed");
-  } catch (const cv::Exception& e) {
-    throw Error(origin + " is not valid YAML/XML/JSON: " + e.err);
-  }
+  detail::open_for_reading(store, path, origin);
   const cv::FileNode root = store.root();
   if (!root.isMap() || !root["kind"].isString())
     throw Error(origin + ": the 'kind' key (camera-plane or homography) is missing");
@@ -235,13 +232,7 @@ Calibration load_calibration(const std::string& path) {
 
 void save_calibration(const Calibration& c, const std::string& path) {
   cv::FileStorage store;
-  try {
-    store.open(path, cv::FileStorage::WRITE);
-  } catch (const cv::Exception& e) {
-    throw Error("calibration file " + in_quotes(path) + " cannot be written: " + e.err);
-  }
-  if (!store.isOpened())
-    throw Error("calibration file " + in_quotes(path) + " cannot be written");
+  detail::open_for_writing(store, path, "calibration file " + in_quotes(path));
   const bool camera = c.kind == CalibrationKind::CameraPlane;
   store.writeComment("pickdetect calibration (docs/robot-output.md): plane coordinates in mm, "
                      "origin and axes as the calibration set them");

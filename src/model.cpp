@@ -4,6 +4,8 @@
 #include <pickdetect/features.hpp>
 #include <pickdetect/model.hpp>
 
+#include "open_file_storage.hpp"
+
 #include <opencv2/core/persistence.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -462,12 +464,7 @@ std::vector<Model> load_views(const std::string& path) {
   require_readable(path, "model file");
   const std::string origin = "model file " + in_quotes(path);
   cv::FileStorage store;
-  try {
-    if (!store.open(path, cv::FileStorage::READ))
-      throw Error(origin + " cannot be parsed");
-  } catch (const cv::Exception& e) {
-    throw Error(origin + " is not valid YAML/XML/JSON: " + e.err);
-  }
+  detail::open_for_reading(store, path, origin);
   try {
     const cv::FileNode root = store.root();
     if (root.isMap() && !root["views"].empty())
@@ -514,21 +511,11 @@ void write_model(cv::FileStorage& store, const Model& model, const fs::path& fol
   }
 }
 
-void open_for_writing(cv::FileStorage& store, const std::string& path) {
-  try {
-    store.open(path, cv::FileStorage::WRITE);
-  } catch (const cv::Exception& e) {
-    throw Error("model file " + in_quotes(path) + " cannot be written: " + e.err);
-  }
-  if (!store.isOpened())
-    throw Error("model file " + in_quotes(path) + " cannot be written");
-}
-
 } // namespace
 
 void save_model(const Model& model, const std::string& path, bool cache_features) {
   cv::FileStorage store;
-  open_for_writing(store, path);
+  detail::open_for_writing(store, path, "model file " + in_quotes(path));
   store << "name" << model.name;
   if (model.height_mm > 0.0)
     store << "height" << model.height_mm;
@@ -544,7 +531,7 @@ void save_views(const std::vector<Model>& views, const std::string& path, bool c
       throw Error("model file " + in_quotes(path) + ": the views name two products, '" +
                   views.front().name + "' and '" + view.name + "'");
   cv::FileStorage store;
-  open_for_writing(store, path);
+  detail::open_for_writing(store, path, "model file " + in_quotes(path));
   const Model& first = views.front();
   store << "name" << first.name;
   if (first.height_mm > 0.0)

@@ -15,14 +15,11 @@
 using namespace pickdetect;
 using pickdetect::test_scene::box_detector;
 using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::box_picture;
 using pickdetect::test_scene::kData;
 using pickdetect::test_scene::Pose;
 
 namespace {
-
-cv::Mat box_picture() {
-  return cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
-}
 
 double distance(cv::Point2f a, cv::Point2f b) {
   return std::hypot(a.x - b.x, a.y - b.y);

@@ -19,7 +19,7 @@
 using namespace pickdetect;
 using pickdetect::test_scene::box_detector;
 using pickdetect::test_scene::box_model;
-using pickdetect::test_scene::kData;
+using pickdetect::test_scene::box_picture;
 using pickdetect::test_scene::Pose;
 
 namespace {
@@ -28,7 +28,7 @@ namespace {
 /// the instance found nearest each pose, in the same order.
 std::vector<Instance> detect_stack(const std::vector<Pose>& poses, cv::Size frame = {900, 700},
                                    bool with_pixels = true) {
-  const cv::Mat picture = cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
+  const cv::Mat picture = box_picture();
   cv::Mat scene = test_scene::plain_background(frame);
   test_scene::paste(scene, picture, poses);
   const Detection d = with_pixels ? box_detector().detect(scene)
@@ -143,7 +143,7 @@ namespace {
 
 /// One box at `pose`, then `draw` over the frame; the instance found nearest the pose.
 template <typename Draw> Instance detect_one(const Pose& pose, Draw&& draw) {
-  const cv::Mat picture = cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
+  const cv::Mat picture = box_picture();
   cv::Mat scene = test_scene::plain_background({800, 600});
   test_scene::paste(scene, picture, {pose});
   draw(scene);
@@ -167,75 +167,73 @@ cv::Point in_frame(const Instance& inst, cv::Point2d p) {
   return {cvRound(at[0] / at[2]), cvRound(at[1] / at[2])};
 }
 
+/// The pose of the lone box the tests below lay things on.
+const Pose kLonePose{{400.f, 300.f}, 20.0, 1.0};
+
+/// Expects the box found under something (`what`: what lies on it) with most of its features
+/// still, covered and not pickable.
+void expect_covered(const Instance& under, const char* what) {
+  EXPECT_GE(under.matches, 20);
+  EXPECT_TRUE(under.covered) << what;
+  EXPECT_FALSE(under.pickable);
+}
+
 } // namespace
 
 TEST(Occlusion, AnObjectOfNoModelLyingOnABoxCoversIt) {
-  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
-  const Instance free = detect_one(pose, [](cv::Mat&) {});
+  const Instance free = detect_one(kLonePose, [](cv::Mat&) {});
   EXPECT_FALSE(free.covered);
   EXPECT_TRUE(free.pickable);
   // A card over one end of the box: a fifth of its width, far from its grasp point (the
   // centre), most of the box's features still seen.
-  const Instance under = detect_one(pose, [](cv::Mat& s) { striped_card(s, {510, 330}, 60); });
-  EXPECT_GE(under.matches, 20);
-  EXPECT_TRUE(under.covered) << "a card lies on the box";
-  EXPECT_FALSE(under.pickable);
+  const Instance under = detect_one(kLonePose, [](cv::Mat& s) { striped_card(s, {510, 330}, 60); });
+  expect_covered(under, "a card lies on the box");
   EXPECT_EQ(under.pick_order, 0);
 }
 
 TEST(Occlusion, APlainObjectLyingOnABoxCoversIt) {
-  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
   // A plain grey lid, no texture of its own, over the box's printed lower end.
-  const Instance under = detect_one(pose, [](cv::Mat& s) {
+  const Instance under = detect_one(kLonePose, [](cv::Mat& s) {
     cv::ellipse(s, {480, 340}, {32, 24}, 30.0, 0.0, 360.0, cv::Scalar(90), cv::FILLED);
   });
-  EXPECT_GE(under.matches, 20);
-  EXPECT_TRUE(under.covered) << "a plain lid lies on the box";
-  EXPECT_FALSE(under.pickable);
+  expect_covered(under, "a plain lid lies on the box");
 }
 
 TEST(Occlusion, ATexturedObjectOnAnUnprintedPartOfABoxCoversIt) {
-  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
-  const Instance free = detect_one(pose, [](cv::Mat&) {});
+  const Instance free = detect_one(kLonePose, [](cv::Mat&) {});
   ASSERT_FALSE(free.covered);
   // box.png's upper left (about x 36-130, y 12-48 of the picture) is plain card: no print to
   // compare with. A striped card lying there shows texture the print cannot have.
   const cv::Point centre = in_frame(free, {80.0, 32.0});
-  const Instance under = detect_one(pose, [&](cv::Mat& s) { striped_card(s, centre, 40); });
-  EXPECT_GE(under.matches, 20);
-  EXPECT_TRUE(under.covered) << "a card lies on the box's plain corner";
-  EXPECT_FALSE(under.pickable);
+  const Instance under = detect_one(kLonePose, [&](cv::Mat& s) { striped_card(s, centre, 40); });
+  expect_covered(under, "a card lies on the box's plain corner");
 }
 
 TEST(Occlusion, ACardBlurredByTheBeltCoversTheBoxItLiesOn) {
-  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
-  const Instance free = detect_one(pose, [](cv::Mat&) {});
+  const Instance free = detect_one(kLonePose, [](cv::Mat&) {});
   ASSERT_FALSE(free.covered);
   // A dim card with faint stripes over the box's print, the whole frame then blurred by a belt
   // moving 11 pixels while the shutter was open: part of the card is flat, part shows smeared
   // stripes, and no part of it shows the print.
   const cv::Point centre = in_frame(free, {200.0, 100.0});
-  const Instance under = detect_one(pose, [&](cv::Mat& s) {
+  const Instance under = detect_one(kLonePose, [&](cv::Mat& s) {
     striped_card(s, centre, 48, 100, 80);
     cv::blur(s, s, cv::Size(11, 1));
   });
-  EXPECT_GE(under.matches, 20);
-  EXPECT_TRUE(under.covered) << "a card lies on the box";
-  EXPECT_FALSE(under.pickable);
+  expect_covered(under, "a card lies on the box");
 }
 
 TEST(Occlusion, MotionBlurOnABoxDoesNotCoverIt) {
-  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
   // The conveyor moved 11 pixels while the shutter was open: the finest print is gone.
-  const Instance blurred = detect_one(pose, [](cv::Mat& s) { cv::blur(s, s, cv::Size(11, 1)); });
+  const Instance blurred =
+      detect_one(kLonePose, [](cv::Mat& s) { cv::blur(s, s, cv::Size(11, 1)); });
   EXPECT_FALSE(blurred.covered);
   EXPECT_TRUE(blurred.pickable);
 }
 
 TEST(Occlusion, GlareAndSpeckleOnABoxDoNotCoverIt) {
-  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
   // A washed-out highlight (flat, brightest there) and sensor noise over the whole frame.
-  const Instance glare = detect_one(pose, [](cv::Mat& s) {
+  const Instance glare = detect_one(kLonePose, [](cv::Mat& s) {
     cv::Mat spot = cv::Mat::zeros(s.size(), CV_8UC1);
     cv::circle(spot, {430, 290}, 35, cv::Scalar(255), cv::FILLED);
     cv::GaussianBlur(spot, spot, cv::Size(0, 0), 6.0);
@@ -247,7 +245,7 @@ TEST(Occlusion, GlareAndSpeckleOnABoxDoNotCoverIt) {
   EXPECT_FALSE(glare.covered);
   EXPECT_TRUE(glare.pickable);
   // A broad sheen that washes the print out to a flat light grey, short of clipping.
-  const Instance sheen = detect_one(pose, [](cv::Mat& s) {
+  const Instance sheen = detect_one(kLonePose, [](cv::Mat& s) {
     cv::Mat alpha = cv::Mat::zeros(s.size(), CV_32FC1);
     cv::circle(alpha, {470, 330}, 30, cv::Scalar(1.0), cv::FILLED);
     cv::GaussianBlur(alpha, alpha, cv::Size(0, 0), 8.0);
@@ -261,8 +259,7 @@ TEST(Occlusion, GlareAndSpeckleOnABoxDoNotCoverIt) {
 }
 
 TEST(Occlusion, AFrameThatIsNotGreyIsRefusedByName) {
-  const Pose pose{{400.f, 300.f}, 20.0, 1.0};
-  std::vector<Instance> found = {detect_one(pose, [](cv::Mat&) {})};
+  std::vector<Instance> found = {detect_one(kLonePose, [](cv::Mat&) {})};
   const cv::Mat colour(600, 800, CV_8UC3, cv::Scalar(90, 90, 90));
   try {
     assess_occlusion(found, box_detector().models(), {800, 600}, colour);

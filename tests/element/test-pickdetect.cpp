@@ -25,13 +25,11 @@
 #include <string>
 #include <vector>
 
-#ifndef TEST_DATA_DIR
-#error "TEST_DATA_DIR must name the folder holding box.png"
-#endif
-
 namespace {
 
-const std::string kBoxPath = std::string(TEST_DATA_DIR) + "/box.png";
+using pickdetect::test_harness::kBoxPath;
+using pickdetect::test_harness::roi_metas;
+using pickdetect::test_harness::roi_param;
 
 const char* const kFormats[] = {"GRAY8", "RGB",  "BGR",  "RGBx", "BGRx", "xRGB", "xBGR", "RGBA",
                                 "BGRA",  "ARGB", "ABGR", "I420", "YV12", "NV12", "NV21"};
@@ -250,10 +248,6 @@ GST_START_TEST(test_draw_colours) {
 }
 GST_END_TEST;
 
-static const GstStructure* roi_param(GstVideoRegionOfInterestMeta* roi) {
-  return gst_video_region_of_interest_meta_get_param(roi, "pick-instance");
-}
-
 static std::vector<double> double_array(const GstStructure* s, const char* field) {
   const GValue* v = gst_structure_get_value(s, field);
   fail_unless(v != nullptr && GST_VALUE_HOLDS_ARRAY(v), "field %s is not an array", field);
@@ -345,11 +339,8 @@ GST_START_TEST(test_meta_roi_message) {
 
   // One ROI per instance, unique ids, the outline's box, the same numbers.
   std::vector<gint> ids;
-  gpointer state = nullptr;
   guint n_roi = 0;
-  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-             out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-    auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+  for (GstVideoRegionOfInterestMeta* roi : roi_metas(out)) {
     fail_unless_equals_string(g_quark_to_string(roi->roi_type), "box");
     fail_unless(std::find(ids.begin(), ids.end(), roi->id) == ids.end(), "duplicate ROI id");
     ids.push_back(roi->id);
@@ -687,6 +678,24 @@ static std::string write_variant(const std::string& dir) {
   return path;
 }
 
+/// The box at kPoses[0] and the variant (see write_variant) at kPoses[1], in a 640x480 grey
+/// scene.
+static cv::Mat box_and_variant_scene(const std::string& variant_path) {
+  cv::Mat scene = make_scene(cv::Size(640, 480), nullptr, false);
+  paste(scene, box_model().image, kPoses[0]);
+  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
+  return scene;
+}
+
+/// A harness around pickdetect (the box model, then `model` set before the start) taking GRAY8
+/// frames of `size`.
+static GstHarness* gray_harness(const std::string& model, cv::Size size) {
+  GstHarness* h = pickdetect_harness();
+  g_object_set(h->element, "model", model.c_str(), nullptr);
+  gst_harness_set_src_caps_str(h, caps_string("GRAY8", size).c_str());
+  return h;
+}
+
 /// A temporary folder, removed with what is in it.
 struct TempDir {
   std::string path;
@@ -695,6 +704,12 @@ struct TempDir {
     fail_unless(dir != nullptr);
     path = dir;
     g_free(dir);
+  }
+  /// Writes `text` to the file `name` in the folder; returns its path.
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::string file = path + "/" + name;
+    fail_unless(g_file_set_contents(file.c_str(), text.c_str(), -1, nullptr));
+    return file;
   }
   ~TempDir() {
     if (GDir* d = g_dir_open(path.c_str(), 0, nullptr)) {
@@ -761,11 +776,8 @@ GST_START_TEST(test_look_alike_models) {
                 "variant at (%.1f, %.1f)", var->center_x, var->center_y);
 
     // The ROI metas name the same model as the instance at their centre.
-    gpointer state = nullptr;
     guint n_roi = 0;
-    while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-               out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-      auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+    for (GstVideoRegionOfInterestMeta* roi : roi_metas(out)) {
       const GstStructure* s = roi_param(roi);
       double cx = 0, cy = 0;
       fail_unless(gst_structure_get_double(s, "center-x", &cx) &&
@@ -798,9 +810,7 @@ GST_START_TEST(test_add_remove_model_while_playing) {
   TempDir dir;
   const std::string variant_path = write_variant(dir.path);
   const cv::Size size(640, 480);
-  cv::Mat scene = make_scene(size, nullptr, false);
-  paste(scene, box_model().image, kPoses[0]);
-  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
+  const cv::Mat scene = box_and_variant_scene(variant_path);
 
   GstHarness* h = pickdetect_harness();
   gst_harness_set_src_caps_str(h, caps_string("GRAY8", size).c_str());
@@ -844,19 +854,11 @@ GST_END_TEST;
 GST_START_TEST(test_views_of_one_product) {
   TempDir dir;
   const std::string variant_path = write_variant(dir.path);
-  const std::string carton = dir.path + "/carton.yml";
-  fail_unless(
-      g_file_set_contents(carton.c_str(),
-                          ("%YAML:1.0\nname: carton\nviews:\n  - name: front\n    image: \"" +
-                           kBoxPath + "\"\n  - image: variant.png\n")
-                              .c_str(),
-                          -1, nullptr));
-  cv::Mat scene = make_scene(cv::Size(640, 480), nullptr, false);
-  paste(scene, box_model().image, kPoses[0]);
-  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
-  GstHarness* h = pickdetect_harness();
-  g_object_set(h->element, "model", carton.c_str(), nullptr);
-  gst_harness_set_src_caps_str(h, caps_string("GRAY8", cv::Size(640, 480)).c_str());
+  const std::string carton =
+      dir.write("carton.yml", "%YAML:1.0\nname: carton\nviews:\n  - name: front\n    image: \"" +
+                                  kBoxPath + "\"\n  - image: variant.png\n");
+  const cv::Mat scene = box_and_variant_scene(variant_path);
+  GstHarness* h = gray_harness(carton, scene.size());
   GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
   const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
   fail_unless(model_names(meta) == std::vector<std::string>({"carton", "carton"}));
@@ -865,11 +867,8 @@ GST_START_TEST(test_views_of_one_product) {
     fail_unless(in != nullptr);
     fail_unless_equals_string(in->view_name, k == 0 ? "front" : "variant");
   }
-  gpointer state = nullptr;
   int rois = 0;
-  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-             out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-    auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
+  for (GstVideoRegionOfInterestMeta* roi : roi_metas(out)) {
     fail_unless_equals_string(g_quark_to_string(roi->roi_type), "carton");
     const GstStructure* s = roi_param(roi);
     double x = 0, y = 0;
@@ -966,17 +965,11 @@ GST_END_TEST;
 GST_START_TEST(test_model_set_file) {
   TempDir dir;
   const std::string variant_path = write_variant(dir.path);
-  const std::string set_path = dir.path + "/products.yml";
-  fail_unless(g_file_set_contents(
-      set_path.c_str(), ("%YAML:1.0\nmodels:\n  - \"" + kBoxPath + "\"\n  - variant.png\n").c_str(),
-      -1, nullptr));
+  const std::string set_path =
+      dir.write("products.yml", "%YAML:1.0\nmodels:\n  - \"" + kBoxPath + "\"\n  - variant.png\n");
 
-  cv::Mat scene = make_scene(cv::Size(640, 480), nullptr, false);
-  paste(scene, box_model().image, kPoses[0]);
-  paste(scene, cv::imread(variant_path, cv::IMREAD_GRAYSCALE), kPoses[1]);
-  GstHarness* h = pickdetect_harness();
-  g_object_set(h->element, "model", set_path.c_str(), nullptr);
-  gst_harness_set_src_caps_str(h, caps_string("GRAY8", cv::Size(640, 480)).c_str());
+  const cv::Mat scene = box_and_variant_scene(variant_path);
+  GstHarness* h = gray_harness(set_path, scene.size());
   GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
   fail_unless(model_names(gst_buffer_get_pickdetect_meta(out)) ==
               std::vector<std::string>({"box", "variant"}));
@@ -990,16 +983,11 @@ GST_START_TEST(test_model_set_file) {
     fail_unless(std::strstr(err->message, what.c_str()) != nullptr, "%s", err->message);
     g_error_free(err);
   };
-  const std::string missing_set = dir.path + "/missing.yml";
-  fail_unless(
-      g_file_set_contents(missing_set.c_str(), "%YAML:1.0\nmodels: [gone.png]\n", -1, nullptr));
+  const std::string missing_set = dir.write("missing.yml", "%YAML:1.0\nmodels: [gone.png]\n");
   expect_error(missing_set, GST_RESOURCE_ERROR_NOT_FOUND, dir.path + "/gone.png");
-  const std::string empty_set = dir.path + "/empty.yml";
-  fail_unless(g_file_set_contents(empty_set.c_str(), "%YAML:1.0\nmodels: 3\n", -1, nullptr));
+  const std::string empty_set = dir.write("empty.yml", "%YAML:1.0\nmodels: 3\n");
   expect_error(empty_set, GST_RESOURCE_ERROR_SETTINGS, "'models' must be");
-  const std::string nested_set = dir.path + "/nested.yml";
-  fail_unless(
-      g_file_set_contents(nested_set.c_str(), "%YAML:1.0\nmodels: [products.yml]\n", -1, nullptr));
+  const std::string nested_set = dir.write("nested.yml", "%YAML:1.0\nmodels: [products.yml]\n");
   expect_error(nested_set, GST_RESOURCE_ERROR_SETTINGS, "lists another model set");
   // box.png is in the set too: two models named "box".
   expect_error(set_path + "," + kBoxPath, GST_RESOURCE_ERROR_SETTINGS,
@@ -1133,9 +1121,7 @@ GST_END_TEST;
 
 static Suite* pickdetect_suite(void) {
   Suite* s = suite_create("pickdetect");
-  TCase* tc = tcase_create("element");
-  tcase_set_timeout(tc, 600);
-  suite_add_tcase(s, tc);
+  TCase* tc = pickdetect::test_harness::add_tcase(s, "element", 600);
   tcase_add_test(tc, test_model_errors);
   tcase_add_test(tc, test_meta_roi_message);
   tcase_add_test(tc, test_formats_same_instances);

@@ -20,19 +20,17 @@
 #include <gst/check/gstcheck.h>
 #include <gst/video/video.h>
 
+#include "../support/harness.hpp"
+
 #include <algorithm>
 #include <cstring>
 #include <mutex>
 #include <string>
 #include <vector>
 
-#ifndef TEST_DATA_DIR
-#error "TEST_DATA_DIR must name the folder holding box.png"
-#endif
-
 namespace {
 
-const std::string kBoxPath = std::string(TEST_DATA_DIR) + "/box.png";
+using pickdetect::test_harness::kBoxPath;
 constexpr int kWidth = 1280, kHeight = 960;
 constexpr int kFrames = 90;                              // 3 s of stream.
 constexpr GstClockTime kFrameDuration = GST_SECOND / 30; // 30 frames per second.
@@ -230,9 +228,8 @@ GST_END_TEST
 
 Suite* qos_suite() {
   Suite* s = suite_create("pickdetect-qos");
-  TCase* tc = tcase_create("qos");
+  TCase* tc = pickdetect::test_harness::add_tcase(s, "qos");
   tcase_add_test(tc, test_late_frames_are_dropped);
-  suite_add_tcase(s, tc);
   return s;
 }
 

@@ -17,19 +17,18 @@
 #include <gst/video/video.h>
 #include <json-glib/json-glib.h>
 
+#include "../support/harness.hpp"
+
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <string>
 #include <vector>
 
-#ifndef TEST_DATA_DIR
-#error "TEST_DATA_DIR must name the folder holding box.png"
-#endif
-
 namespace {
 
 namespace cs = pickdetect::camera_scene;
+using pickdetect::test_harness::kBoxPath;
 
 constexpr double kBoxHeight = 40.0; ///< mm, the model file's `height`.
 
@@ -67,7 +66,7 @@ const std::vector<cs::Box> kBoxes = {
 };
 
 cv::Mat box_picture() {
-  return cv::imread(std::string(TEST_DATA_DIR) + "/box.png", cv::IMREAD_GRAYSCALE);
+  return cv::imread(kBoxPath, cv::IMREAD_GRAYSCALE);
 }
 
 GstBuffer* gray_buffer(const cv::Mat& grey, GstClockTime pts) {
@@ -150,12 +149,9 @@ GST_START_TEST(test_world_positions_within_half_a_millimetre) {
   }
 
   // The pick-instance structures carry the same world fields.
-  gpointer state = nullptr;
   int rois = 0;
-  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-             out, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-    auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
-    const GstStructure* s = gst_video_region_of_interest_meta_get_param(roi, "pick-instance");
+  for (GstVideoRegionOfInterestMeta* roi : pickdetect::test_harness::roi_metas(out)) {
+    const GstStructure* s = pickdetect::test_harness::roi_param(roi);
     fail_unless(s != nullptr);
     double wx = 0, wy = 0, angle = 0, gx = 0, gy = 0, height = 0;
     fail_unless(gst_structure_get(s, "world-x", G_TYPE_DOUBLE, &wx, "world-y", G_TYPE_DOUBLE, &wy,
@@ -427,9 +423,7 @@ GST_END_TEST;
 
 Suite* robot_suite() {
   Suite* s = suite_create("robot");
-  TCase* tc = tcase_create("robot");
-  tcase_set_timeout(tc, 600);
-  suite_add_tcase(s, tc);
+  TCase* tc = pickdetect::test_harness::add_tcase(s, "robot", 600);
   tcase_add_test(tc, test_world_positions_within_half_a_millimetre);
   tcase_add_test(tc, test_velocity_on_the_plane_in_millimetres_per_second);
   tcase_add_test(tc, test_json_lines_match_the_metas);

@@ -21,15 +21,11 @@
 #include <string>
 #include <vector>
 
-#ifndef TEST_DATA_DIR
-#error "TEST_DATA_DIR must name the folder holding box.png"
-#endif
-
 namespace {
 
 using pickdetect::test_scene::Pose;
 
-const std::string kBoxPath = std::string(TEST_DATA_DIR) + "/box.png";
+using pickdetect::test_harness::kBoxPath;
 constexpr GstClockTime kFrameDuration = GST_SECOND / 30;
 
 const cv::Mat& box_picture() {
@@ -271,8 +267,7 @@ GST_END_TEST;
 
 static Suite* threads_suite(void) {
   Suite* s = suite_create("pickdetect-threads");
-  TCase* tc = tcase_create("threads");
-  suite_add_tcase(s, tc);
+  TCase* tc = pickdetect::test_harness::add_tcase(s, "threads");
   tcase_add_test(tc, test_threads_property);
   tcase_add_test(tc, test_threads_same_results_in_order);
   tcase_add_test(tc, test_threads_events_keep_their_place);

@@ -20,15 +20,11 @@
 #include <string>
 #include <vector>
 
-#ifndef TEST_DATA_DIR
-#error "TEST_DATA_DIR must name the folder holding box.png"
-#endif
-
 namespace {
 
 using pickdetect::test_scene::Pose;
 
-const std::string kBoxPath = std::string(TEST_DATA_DIR) + "/box.png";
+using pickdetect::test_harness::kBoxPath;
 constexpr GstClockTime kFrame = GST_SECOND / 30;
 const cv::Size kSize(640, 480);
 
@@ -63,12 +59,9 @@ std::vector<guint64> track_ids(GstBuffer* buffer) {
   std::vector<guint64> ids;
   for (guint k = 0; k < meta->n_instances; k++)
     ids.push_back(meta->instances[k].track_id);
-  gpointer state = nullptr;
   guint n = 0;
-  while (GstMeta* m = gst_buffer_iterate_meta_filtered(
-             buffer, &state, GST_VIDEO_REGION_OF_INTEREST_META_API_TYPE)) {
-    auto* roi = reinterpret_cast<GstVideoRegionOfInterestMeta*>(m);
-    const GstStructure* s = gst_video_region_of_interest_meta_get_param(roi, "pick-instance");
+  for (GstVideoRegionOfInterestMeta* roi : pickdetect::test_harness::roi_metas(buffer)) {
+    const GstStructure* s = pickdetect::test_harness::roi_param(roi);
     const GstStructure* object = gst_video_region_of_interest_meta_get_param(roi, "object_id");
     guint64 id = 0;
     gint object_id = -1;
@@ -423,9 +416,7 @@ GST_END_TEST;
 
 static Suite* tracking_suite(void) {
   Suite* s = suite_create("tracking");
-  TCase* tc = tcase_create("tracking");
-  tcase_set_timeout(tc, 300);
-  suite_add_tcase(s, tc);
+  TCase* tc = pickdetect::test_harness::add_tcase(s, "tracking", 300);
   tcase_add_test(tc, test_ids_stable_and_velocity);
   tcase_add_test(tc, test_tracking_off_gives_frame_by_frame);
   tcase_add_test(tc, test_stream_events_reset_or_keep);

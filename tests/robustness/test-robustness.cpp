@@ -30,13 +30,9 @@
 #include <unistd.h>
 #include <vector>
 
-#ifndef TEST_DATA_DIR
-#error "TEST_DATA_DIR must name the folder holding box.png"
-#endif
-
 namespace {
 
-const std::string kBoxPath = std::string(TEST_DATA_DIR) + "/box.png";
+using pickdetect::test_harness::kBoxPath;
 
 struct Pose {
   double x, y, angle, scale;
@@ -753,30 +749,22 @@ GST_END_TEST;
 
 static Suite* robustness_suite(void) {
   Suite* s = suite_create("pickdetect-robustness");
-  TCase* models = tcase_create("models");
-  tcase_set_timeout(models, 600);
-  suite_add_tcase(s, models);
+  TCase* models = pickdetect::test_harness::add_tcase(s, "models", 600);
   tcase_add_test(models, test_bad_models);
   tcase_add_test(models, test_models_that_are_not_files);
   tcase_add_test(models, test_unreadable_model);
 
-  TCase* props = tcase_create("properties");
-  tcase_set_timeout(props, 600);
-  suite_add_tcase(s, props);
+  TCase* props = pickdetect::test_harness::add_tcase(s, "properties", 600);
   tcase_add_test(props, test_property_ranges);
   tcase_add_test(props, test_property_extremes);
   tcase_add_test(props, test_properties_while_flowing);
 
-  TCase* frames = tcase_create("frames");
-  tcase_set_timeout(frames, 1200);
-  suite_add_tcase(s, frames);
+  TCase* frames = pickdetect::test_harness::add_tcase(s, "frames", 1200);
   tcase_add_test(frames, test_small_and_odd_frames);
   tcase_add_test(frames, test_drawing_odd_frames);
   tcase_add_test(frames, test_large_frames);
 
-  TCase* stream = tcase_create("stream");
-  tcase_set_timeout(stream, 600);
-  suite_add_tcase(s, stream);
+  TCase* stream = pickdetect::test_harness::add_tcase(s, "stream", 600);
   tcase_add_test(stream, test_renegotiation_flush_eos);
   tcase_add_test(stream, test_state_cycles);
   return s;

@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
-// The model the core's tests detect: OpenCV's box.png (Debian's opencv-doc), loaded once.
+// The model the core's tests detect: OpenCV's box.png (Debian's opencv-doc), its picture and
+// its model (loaded once).
 #pragma once
 
 #include <pickdetect/pickdetect.hpp>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include <string>
 
@@ -10,6 +13,11 @@ namespace pickdetect::test_scene {
 
 /// Folder of OpenCV's sample pictures, given by the build (PICKDETECT_TEST_DATA).
 inline const std::string kData = PICKDETECT_TEST_DATA;
+
+/// box.png as a grey picture, read afresh.
+inline cv::Mat box_picture() {
+  return cv::imread(kData + "/box.png", cv::IMREAD_GRAYSCALE);
+}
 
 inline const Model& box_model() {
   static const Model model = load_model(kData + "/box.png");

@@ -370,53 +370,27 @@ int run(int argc, char** argv) {
     std::vector<int> all(models.size());
     for (size_t i = 0; i < all.size(); ++i)
       all[i] = static_cast<int>(i);
-    struct Item {
-      int model;
-      double x, y, angle, scale, tilt, axis, brightness;
-      bool highlight;
-      cv::Point2d highlight_at;
-    };
-    std::vector<Item> items;
+    std::vector<BeltItem> items;
     for (int i = 0; i < count; ++i) {
-      Item it;
+      BeltItem it;
       it.model = all[static_cast<size_t>(rng.integer(0, static_cast<int>(all.size()) - 1))];
       it.x = -margin - speed * scenes + rng.uniform(0, length);
       it.y = rng.uniform(0.25, 0.75) * s.size.height;
-      it.angle = rng.uniform(0, 360);
-      it.scale = rng.uniform(s.min_scale, s.max_scale);
-      it.tilt = rng.uniform(0, s.max_tilt);
-      it.axis = rng.uniform(0, CV_PI);
-      it.brightness = rng.uniform(0.8, 1.15);
-      it.highlight = rng.chance(0.3);
-      const ModelPicture& m = models[static_cast<size_t>(it.model)];
-      it.highlight_at = {rng.uniform(0, m.bgr.cols), rng.uniform(0, m.bgr.rows)};
+      draw_look(it, models, s, rng);
       items.push_back(it);
     }
     Random scenery(static_cast<uint64_t>(seed) ^ 0x5eedull);
     cv::Mat belt = background("conveyor", s.size, scenery);
     for (int f = 0; f < scenes; ++f) {
       std::vector<Placed> placed;
-      for (const Item& it : items) {
+      for (const BeltItem& it : items) {
         const double x = it.x + speed * f;
         if (x < -margin || x > s.size.width + margin)
           continue;
-        Placed p;
-        p.model = it.model;
-        p.angle = it.angle;
-        p.scale = it.scale;
-        p.tilt = it.tilt;
-        p.brightness = it.brightness;
-        p.highlight = it.highlight;
-        p.highlight_at = it.highlight_at;
-        p.homography = placement(models[static_cast<size_t>(it.model)], it.angle, it.scale, it.tilt,
-                                 it.axis, {x, it.y});
-        placed.push_back(p);
+        placed.push_back(place_item(models, it, {x, it.y}));
       }
       Rendered r = render(belt.clone(), models, placed, rng, margin, extras);
-      // Instances wholly off the frame are not part of this frame's ground truth.
-      r.truth.erase(std::remove_if(r.truth.begin(), r.truth.end(),
-                                   [](const Rendered::Truth& t) { return t.in_frame <= 0.0; }),
-                    r.truth.end());
+      drop_off_frame(r);
       frames.push_back(std::move(r));
       kinds.push_back("conveyor");
       progress("frame", f + 1, scenes);

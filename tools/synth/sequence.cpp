@@ -20,49 +20,17 @@ double reach(const ModelPicture& m, double scale) {
   return std::hypot(m.bgr.cols, m.bgr.rows) * scale;
 }
 
-struct Item {
-  int model = 0;
-  int track = 0;
-  double x = 0, y = 0; ///< Centre at frame 0 (belt coordinates for a conveyor).
-  double angle = 0, scale = 1, tilt = 0, axis = 0, brightness = 1;
-  bool highlight = false;
-  cv::Point2d highlight_at;
-  bool rider = false; ///< Lies on another item (drawn after every item that is not one).
-};
-
-Item random_item(const std::vector<ModelPicture>& models, const Settings& s, Random& rng) {
-  Item it;
+BeltItem random_item(const std::vector<ModelPicture>& models, const Settings& s, Random& rng) {
+  BeltItem it;
   it.model = rng.integer(0, static_cast<int>(models.size()) - 1);
-  it.angle = rng.uniform(0, 360);
-  it.scale = rng.uniform(s.min_scale, s.max_scale);
-  it.tilt = rng.uniform(0, s.max_tilt);
-  it.axis = rng.uniform(0, CV_PI);
-  it.brightness = rng.uniform(0.8, 1.15);
-  it.highlight = rng.chance(0.3);
-  const ModelPicture& m = models[static_cast<size_t>(it.model)];
-  it.highlight_at = {rng.uniform(0, m.bgr.cols), rng.uniform(0, m.bgr.rows)};
+  draw_look(it, models, s, rng);
   return it;
-}
-
-Placed place_item(const std::vector<ModelPicture>& models, const Item& it, cv::Point2d at) {
-  Placed p;
-  p.model = it.model;
-  p.track = it.track;
-  p.angle = it.angle;
-  p.scale = it.scale;
-  p.tilt = it.tilt;
-  p.brightness = it.brightness;
-  p.highlight = it.highlight;
-  p.highlight_at = it.highlight_at;
-  p.homography =
-      placement(models[static_cast<size_t>(it.model)], it.angle, it.scale, it.tilt, it.axis, at);
-  return p;
 }
 
 /// The lanes of a belt and the items riding on them, from far left (arriving last) to the
 /// right edge of the frame at frame 0.
-std::vector<Item> belt_items(const std::vector<ModelPicture>& models, const Settings& s,
-                             const SequenceOptions& o, int margin, Random& rng) {
+std::vector<BeltItem> belt_items(const std::vector<ModelPicture>& models, const Settings& s,
+                                 const SequenceOptions& o, int margin, Random& rng) {
   double largest = 0;
   for (const ModelPicture& m : models)
     largest = std::max(largest, reach(m, s.max_scale));
@@ -70,13 +38,13 @@ std::vector<Item> belt_items(const std::vector<ModelPicture>& models, const Sett
   const int lanes = std::max(1, static_cast<int>(usable / (largest * 1.05)));
   const double lane_height = usable / lanes;
   const double start = -margin - o.speed * o.frames, end = s.size.width + margin;
-  std::vector<Item> items;
+  std::vector<BeltItem> items;
   int track = 1;
   for (int lane = 0; lane < lanes; ++lane) {
     const double y = s.size.height / 12.0 + lane_height * (lane + 0.5);
     double x = end - rng.uniform(0, largest);
     while (x > start) {
-      Item it = random_item(models, s, rng);
+      BeltItem it = random_item(models, s, rng);
       it.x = x;
       it.y = y + rng.uniform(-0.15, 0.15) *
                      std::max(0.0,
@@ -86,7 +54,7 @@ std::vector<Item> belt_items(const std::vector<ModelPicture>& models, const Sett
       const double size = reach(models[static_cast<size_t>(it.model)], it.scale);
       if (rng.chance(o.riders)) {
         // Partly on it, turned, riding with it.
-        Item r = random_item(models, s, rng);
+        BeltItem r = random_item(models, s, rng);
         r.rider = true;
         r.x = it.x + rng.uniform(-0.3, 0.3) * size;
         r.y = it.y + rng.uniform(-0.15, 0.15) * size;
@@ -110,18 +78,51 @@ void belt_blur(cv::Mat& image, double length) {
 
 } // namespace
 
+void draw_look(BeltItem& it, const std::vector<ModelPicture>& models, const Settings& s,
+               Random& rng) {
+  it.angle = rng.uniform(0, 360);
+  it.scale = rng.uniform(s.min_scale, s.max_scale);
+  it.tilt = rng.uniform(0, s.max_tilt);
+  it.axis = rng.uniform(0, CV_PI);
+  it.brightness = rng.uniform(0.8, 1.15);
+  it.highlight = rng.chance(0.3);
+  const ModelPicture& m = models[static_cast<size_t>(it.model)];
+  it.highlight_at = {rng.uniform(0, m.bgr.cols), rng.uniform(0, m.bgr.rows)};
+}
+
+Placed place_item(const std::vector<ModelPicture>& models, const BeltItem& it, cv::Point2d at) {
+  Placed p;
+  p.model = it.model;
+  p.track = it.track;
+  p.angle = it.angle;
+  p.scale = it.scale;
+  p.tilt = it.tilt;
+  p.brightness = it.brightness;
+  p.highlight = it.highlight;
+  p.highlight_at = it.highlight_at;
+  p.homography =
+      placement(models[static_cast<size_t>(it.model)], it.angle, it.scale, it.tilt, it.axis, at);
+  return p;
+}
+
+void drop_off_frame(Rendered& r) {
+  r.truth.erase(std::remove_if(r.truth.begin(), r.truth.end(),
+                               [](const Rendered::Truth& t) { return t.in_frame <= 0.0; }),
+                r.truth.end());
+}
+
 std::vector<Rendered> make_sequence(const std::vector<ModelPicture>& models, const Settings& s,
                                     const SequenceOptions& o, Random& rng, int margin,
                                     const Extras& extras, void (*progress)(int done, int total)) {
   std::vector<Rendered> frames;
   const uint64_t look_seed = rng.next(); // Light, shadows and focus of every frame.
   if (o.kind == "conveyor") {
-    const std::vector<Item> items = belt_items(models, s, o, margin, rng);
+    const std::vector<BeltItem> items = belt_items(models, s, o, margin, rng);
     Random scenery(look_seed ^ 0x5eedull);
     const cv::Mat belt = background("conveyor", s.size, scenery);
     for (int f = 0; f < o.frames; ++f) {
       std::vector<Placed> placed, riders;
-      for (const Item& it : items) {
+      for (const BeltItem& it : items) {
         const double x = it.x + o.speed * f;
         if (x < -margin || x > s.size.width + margin)
           continue;
@@ -133,9 +134,7 @@ std::vector<Rendered> make_sequence(const std::vector<ModelPicture>& models, con
       blur.fixed_blur = true;
       Rendered r = render(belt.clone(), models, placed, look, margin, blur);
       belt_blur(r.image, o.speed * o.exposure);
-      r.truth.erase(std::remove_if(r.truth.begin(), r.truth.end(),
-                                   [](const Rendered::Truth& t) { return t.in_frame <= 0.0; }),
-                    r.truth.end());
+      drop_off_frame(r);
       frames.push_back(std::move(r));
       if (progress)
         progress(f + 1, o.frames);
@@ -172,9 +171,7 @@ std::vector<Rendered> make_sequence(const std::vector<ModelPicture>& models, con
     still.fixed_blur = true;
     last = render(bg.clone(), models, placed, look, margin, still);
     Rendered r = last;
-    r.truth.erase(std::remove_if(r.truth.begin(), r.truth.end(),
-                                 [](const Rendered::Truth& t) { return t.in_frame <= 0.0; }),
-                  r.truth.end());
+    drop_off_frame(r);
     frames.push_back(std::move(r));
     if (progress)
       progress(f + 1, o.frames);

@@ -136,6 +136,25 @@ std::vector<Placed> place(const std::string& kind, const std::vector<ModelPictur
 int margin_for(const std::vector<ModelPicture>& models, const Settings& s);
 
 // sequence.cpp: the frames of one video, each instance with its `track`.
+/// An object on a belt: drawn once, placed again in every frame at its centre moved along the
+/// belt (--video's clip and the conveyor sequence).
+struct BeltItem {
+  int model = 0;
+  int track = -1;      ///< Placed::track.
+  double x = 0, y = 0; ///< Centre at frame 0 (belt coordinates).
+  double angle = 0, scale = 1, tilt = 0, axis = 0, brightness = 1;
+  bool highlight = false;
+  cv::Point2d highlight_at; ///< Model pixels.
+  bool rider = false;       ///< Lies on another item (drawn after every item that is not one).
+};
+/// Draws `it`'s angle, scale, tilt, axis, brightness and highlight from `rng`, in that order,
+/// for its model (`it.model` set already).
+void draw_look(BeltItem& it, const std::vector<ModelPicture>& models, const Settings& s,
+               Random& rng);
+/// `it` placed with its centre at `at` (frame pixels).
+Placed place_item(const std::vector<ModelPicture>& models, const BeltItem& it, cv::Point2d at);
+/// Drops from `r`'s ground truth the instances wholly off the frame: they are not part of it.
+void drop_off_frame(Rendered& r);
 std::vector<Rendered> make_sequence(const std::vector<ModelPicture>& models, const Settings& s,
                                     const SequenceOptions& o, Random& rng, int margin,
                                     const Extras& extras, void (*progress)(int done, int total));
