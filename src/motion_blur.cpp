@@ -9,8 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <utility>
-#include <vector>
 
 namespace pickdetect::detail {
 namespace {
@@ -170,17 +168,12 @@ std::optional<double> measure_blur_length(const cv::Mat& grey, const Model& mode
   // own (round) blur and the light change little. The longer the blur, the more it streaks:
   // the length is found by halving the span it lies in.
   const double wanted = streak(seen, direction, mask);
-  std::vector<std::pair<double, cv::Mat>> tried; // Each length's blur, made once.
   auto blurred_by = [&](double length) {
+    cv::Mat blurred; // Not in place: each length blurs the drawn picture afresh.
     if (length < 1.0)
       return drawn;
-    for (const auto& [l, blurred] : tried)
-      if (l == length)
-        return blurred;
-    cv::Mat blurred; // Not in place: each length blurs the drawn picture afresh.
     cv::filter2D(drawn, blurred, -1, line_kernel(direction, length), cv::Point(-1, -1), 0,
                  cv::BORDER_REPLICATE);
-    tried.emplace_back(length, blurred);
     return blurred;
   };
   double shorter = 0.0, longer = longest;
