@@ -73,12 +73,20 @@ void refine_robustly(const ModelScene& ms, const std::vector<int>& in, bool allo
 bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow_scale,
                         const std::vector<char>& claimed, std::vector<int>& in, cv::Matx33d& h);
 
+/// Fewest inliers the affine pose of a foreshortened face (refine_foreshortened) rests on
+/// beside a similarity that holds, and the fewest from which a homography is fitted to them...
+constexpr size_t kMinForeshortenedMatches = 8;
+/// ...and where the similarity holds too few inliers to stand by itself (a small or partly seen
+/// face far off the picture plane, its votes scattered along the foreshortened axis).
+constexpr size_t kMinForeshortenedFewest = 5;
+
 /// A face tilted away from the camera (refine.cpp): an affine pose found by RANSAC among the
 /// hypothesis' `members` and the unclaimed matches around the similarity `pose`, then refitted
-/// as a homography on its inliers; true (with `in` its inliers and `h` the map) when it
-/// gathers clearly more inliers than the similarity's `in`.
+/// as a homography on its inliers when they are kMinForeshortenedMatches or more; true (with
+/// `in` its inliers and `h` the map) when it gathers clearly more inliers than the similarity's
+/// `in`, and at least `fewest`.
 bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool allow_scale,
                           const std::vector<int>& members, const std::vector<char>& claimed,
-                          std::vector<int>& in, cv::Matx33d& h);
+                          std::vector<int>& in, cv::Matx33d& h, size_t fewest);
 
 } // namespace pickdetect::detail

@@ -36,9 +36,8 @@ constexpr double kMaxPerspectiveShift = 0.15;
 /// A face tilted away from the camera is foreshortened along one axis: a similarity then fits
 /// only a part of it, and its votes scatter along that axis. Its pose is searched as an affine
 /// map (RANSAC) over the hypothesis' votes and the matches on its outline grown by this factor,
-/// when they are at least kMinForeshortenedMatches...
+/// when they are at least kMinForeshortenedMatches (model_scene.hpp)...
 constexpr double kForeshortenedReach = 1.5;
-constexpr size_t kMinForeshortenedMatches = 8;
 /// ...kept when its axes' scales differ by no more than this factor (a face seen up to about
 /// 70 degrees off its normal) and it gathers at least kForeshortenedGain times the
 /// similarity's inliers.
@@ -189,7 +188,7 @@ bool refine_perspective(const ModelScene& ms, const Similarity& pose, bool allow
 
 bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool allow_scale,
                           const std::vector<int>& members, const std::vector<char>& claimed,
-                          std::vector<int>& in, cv::Matx33d& h) {
+                          std::vector<int>& in, cv::Matx33d& h, size_t fewest) {
   if (!allow_scale)
     return false;
   // Candidates: the hypothesis' own votes and every unclaimed match of the same rotation on
@@ -212,7 +211,7 @@ bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool all
   for (size_t i = 0; i < candidate.size(); ++i)
     if (candidate[i])
       pool.push_back(static_cast<int>(i));
-  if (pool.size() < kMinForeshortenedMatches || pool.size() <= in.size())
+  if (pool.size() < fewest || pool.size() <= in.size())
     return false;
   const double tol = inlier_distance(ms, pose.scale);
   cv::Mat mask;
@@ -231,11 +230,14 @@ bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool all
   if (sv.at<double>(1) < kMaxForeshortening * sv.at<double>(0))
     return false;
   std::vector<int> current = inliers_of(ms, pose, map, allow_scale, claimed);
-  if (current.size() < kMinForeshortenedMatches ||
+  if (current.size() < fewest ||
       static_cast<double>(current.size()) < kForeshortenedGain * static_cast<double>(in.size()))
     return false;
-  // Then a homography on those inliers (the far end smaller), while it gathers more.
-  for (int round = 0; round < kRefineRounds; ++round) {
+  // Then a homography on those inliers (the far end smaller), while it gathers more; on fewer
+  // than kMinForeshortenedMatches its eight parameters would follow the keypoints' own errors:
+  // the affine map stays.
+  for (int round = 0; round < kRefineRounds && current.size() >= kMinForeshortenedMatches;
+       ++round) {
     cv::Matx33d next;
     if (!fit_homography(model_points(ms, current), scene_points(ms, current), map, next, {},
                         Loss::Cauchy))

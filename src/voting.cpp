@@ -6,6 +6,8 @@
 #include "median.hpp"
 #include "model_scene.hpp"
 
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <cmath>
 
@@ -254,11 +256,24 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       std::vector<int> in = refine_pose(ms, pose, s.allow_scale, claimed);
       if (static_cast<int>(in.size()) < s.min_matches)
         in = refine_from_members(ms, members, s.allow_scale, claimed, pose);
-      if (static_cast<int>(in.size()) < s.min_matches)
-        continue;
       cv::Matx33d h;
+      const size_t fewest = static_cast<size_t>(std::max(1, s.min_matches));
       // Without allow_scale the objects keep the model's size: the pose stays rigid.
-      if (refine_foreshortened(ms, pose, s.allow_scale, members, claimed, in, h)) {
+      if (in.size() < fewest) {
+        // A face far off the picture plane: a similarity fits only a part of it, whatever it
+        // is refitted on. Its hypothesis still stands if an affine map gathers its votes.
+        if (!refine_foreshortened(ms, pose, s.allow_scale, members, claimed, in, h,
+                                  std::max(fewest, kMinForeshortenedFewest)))
+          continue;
+        place(inst, ms.model, h);
+        // Votes left over from a face already found (its similarity took only a part of
+        // them) are that face again, not another.
+        if (std::any_of(found.begin(), found.end(), [&](const Instance& other) {
+              return cv::pointPolygonTest(other.outline, inst.center, false) >= 0;
+            }))
+          continue;
+      } else if (refine_foreshortened(ms, pose, s.allow_scale, members, claimed, in, h,
+                                      kMinForeshortenedMatches)) {
         place(inst, ms.model, h);
       } else if (s.allow_scale && refine_perspective(ms, pose, s.allow_scale, claimed, in, h)) {
         place(inst, ms.model, h);

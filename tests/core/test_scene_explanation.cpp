@@ -122,6 +122,59 @@ TEST(SceneExplanation, AFaceTiltedFarFromTheCameraIsPlacedByAllItsEvidence) {
         << "), got (" << inst.points[k].x << ", " << inst.points[k].y << ")";
 }
 
+TEST(SceneExplanation, AFewMatchesOfAFaceFarOffThePicturePlaneMakeItsInstance) {
+  // Eight keypoints of the box's own picture, away from the middle row, seen on a face turned
+  // 20 degrees in the frame and foreshortened to 0.5 of its height (about 60 degrees off its
+  // normal): each keypoint's own similarity puts the centre 15-50 px off along the short axis,
+  // so no similarity gathers four of them, while one affine map carries them all. As a small
+  // or partly seen face far off the picture plane gives: found, where it is.
+  const Model& model = box_model();
+  const size_t own =
+      extract_features(model.image, model.mask, FeatureKind::Sift, model.contrast_threshold)
+          .keypoints.size(); // the picture's own come first, then its tilted views'
+  const cv::Point2f centre = model.principal_points[0];
+  const double scale = 0.8, squeeze = 0.5, turn = 20.0;
+  const double rad = turn * CV_PI / 180.0;
+  const cv::Matx22d map = cv::Matx22d(std::cos(rad), -std::sin(rad), std::sin(rad), std::cos(rad)) *
+                          cv::Matx22d(scale, 0.0, 0.0, scale * squeeze);
+  const cv::Point2f at(320.f, 240.f);
+  // The strongest keypoint in each of eight columns, above and below the middle by turns.
+  const int columns = 8;
+  Features scene;
+  for (int column = 0; column < columns; ++column) {
+    const float x0 = static_cast<float>(model.image.cols * column) / columns;
+    const float x1 = static_cast<float>(model.image.cols * (column + 1)) / columns;
+    const float side = column % 2 == 0 ? -1.f : 1.f;
+    int best = -1;
+    for (size_t i = 0; i < own; ++i) {
+      const cv::KeyPoint& k = model.sift.keypoints[i];
+      if (k.pt.x >= x0 && k.pt.x < x1 && side * (k.pt.y - centre.y) >= 0.25f * model.image.rows &&
+          (best < 0 || k.response > model.sift.keypoints[static_cast<size_t>(best)].response))
+        best = static_cast<int>(i);
+    }
+    ASSERT_GE(best, 0) << "column " << column;
+    cv::KeyPoint k = model.sift.keypoints[static_cast<size_t>(best)];
+    const cv::Vec2d p = map * cv::Vec2d(k.pt.x - centre.x, k.pt.y - centre.y);
+    k.pt = at + cv::Point2f(static_cast<float>(p[0]), static_cast<float>(p[1]));
+    k.angle = std::fmod(k.angle + static_cast<float>(turn), 360.f);
+    k.size *= static_cast<float>(scale);
+    scene.keypoints.push_back(k);
+    scene.descriptors.push_back(model.sift.descriptors.row(best));
+  }
+  const Detection d = box_detector().detect(scene, cv::Size(640, 480), Settings());
+  ASSERT_EQ(d.instances.size(), 1u) << "one face, one instance, from " << d.matches << " matches";
+  const Instance& inst = d.instances[0];
+  EXPECT_EQ(inst.matches, columns);
+  for (size_t k = 0; k < model.principal_points.size(); ++k) {
+    const cv::Point2f& p = model.principal_points[k];
+    const cv::Vec2d q = map * cv::Vec2d(p.x - centre.x, p.y - centre.y);
+    const cv::Point2f truth = at + cv::Point2f(static_cast<float>(q[0]), static_cast<float>(q[1]));
+    EXPECT_LT(cv::norm(inst.points[k] - truth), 1.0)
+        << "principal point " << k << ": expected (" << truth.x << ", " << truth.y << "), got ("
+        << inst.points[k].x << ", " << inst.points[k].y << ")";
+  }
+}
+
 TEST(SceneExplanation, AFewAgreeingKeypointsInClutterDoNotMakeAnInstance) {
   // Left: one box. Right: dense print of no model (OpenCV's baboon) where a few small pieces
   // of the box's print lie just where one pose of the box would put them: a handful of
