@@ -225,20 +225,15 @@ bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool all
   const double det = map(0, 0) * map(1, 1) - map(0, 1) * map(1, 0);
   if (!(det > 0.0))
     return false;
-  cv::Mat sv, u, vt;
-  cv::SVD::compute(cv::Mat(cv::Matx22d(map(0, 0), map(0, 1), map(1, 0), map(1, 1))), sv, u, vt);
+  cv::Mat sv;
+  cv::SVD::compute(cv::Mat(cv::Matx22d(map(0, 0), map(0, 1), map(1, 0), map(1, 1))), sv);
   if (sv.at<double>(1) < kMaxForeshortening * sv.at<double>(0))
     return false;
   // Beside a similarity that holds, the matches must agree with its rotation and scale; where
   // none held (fewer than kMinForeshortenedMatches asked for: the similarity kept too few
   // inliers to stand), with the affine map's own (its nearest similarity).
-  Similarity own = pose;
-  if (fewest < kMinForeshortenedMatches) {
-    const cv::Mat r = u * vt; // the rotation nearest the map's linear part
-    const double angle = std::atan2(r.at<double>(1, 0), r.at<double>(0, 0)) * 180.0 / CV_PI;
-    own.angle = angle < 0.0 ? angle + 360.0 : angle;
-    own.scale = std::sqrt(det);
-  }
+  const Similarity own =
+      fewest < kMinForeshortenedMatches ? similarity_near(map, ms.model.principal_points[0]) : pose;
   std::vector<int> current = inliers_of(ms, own, map, allow_scale, claimed);
   if (current.size() < fewest ||
       static_cast<double>(current.size()) < kForeshortenedGain * static_cast<double>(in.size()))
