@@ -19,25 +19,10 @@
 
 using namespace pickdetect;
 using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::faint_box_model;
 using pickdetect::test_scene::Pose;
 
 namespace {
-
-/// The box's print washed out towards white: its darkest level 255 - 0.75 * 255.
-cv::Mat washed_out(const cv::Mat& grey) {
-  cv::Mat out;
-  grey.convertTo(out, CV_8U, 0.25, 255 * (1 - 0.25));
-  return out;
-}
-
-/// The box model with its picture washed out, its features found as the loaders find them.
-Model faint_model() {
-  Model m = box_model();
-  m.image = washed_out(box_model().image);
-  m.colour.release();
-  compute_model_features(m);
-  return m;
-}
 
 const std::vector<Pose> kPoses = {
     {{170.f, 150.f}, 20.0, 0.6}, {{460.f, 160.f}, 110.0, 0.6}, {{320.f, 350.f}, 200.0, 0.6}};
@@ -78,7 +63,7 @@ protected:
 TEST(FaintPrint, APictureWithLittlePrintIsSearchedAtALowerThreshold) {
   EXPECT_DOUBLE_EQ(box_model().contrast_threshold, kSiftContrastThreshold)
       << "a picture with plenty of print keeps SIFT's usual threshold";
-  const Model faint = faint_model();
+  const Model faint = faint_box_model();
   EXPECT_LT(faint.contrast_threshold, kSiftContrastThreshold);
   EXPECT_GE(faint.contrast_threshold, kLeastModelContrastThreshold);
   const Features usual =
@@ -94,17 +79,17 @@ TEST(FaintPrint, APictureWithLittlePrintIsSearchedAtALowerThreshold) {
 }
 
 TEST(FaintPrint, FramesSearchedForAFaintModelKeepTheirWeakerExtrema) {
-  const cv::Mat scene = faint_scene(faint_model());
+  const cv::Mat scene = faint_scene(faint_box_model());
   const Settings automatic;
   const double usual = frame_contrast_threshold(scene, automatic);
   EXPECT_DOUBLE_EQ(Detector({box_model()}).frame_contrast_threshold(scene, automatic), usual);
   EXPECT_DOUBLE_EQ(
-      Detector({box_model(), faint_model()}).frame_contrast_threshold(scene, automatic),
+      Detector({box_model(), faint_box_model()}).frame_contrast_threshold(scene, automatic),
       usual * kFaintPrintFrameShare)
       << "one faint model among others lowers the frames' threshold";
   Settings fixed;
   fixed.contrast_threshold = 0.03;
-  EXPECT_DOUBLE_EQ(Detector({faint_model()}).frame_contrast_threshold(scene, fixed), 0.03)
+  EXPECT_DOUBLE_EQ(Detector({faint_box_model()}).frame_contrast_threshold(scene, fixed), 0.03)
       << "a threshold set by hand is kept";
   EXPECT_GE(frame_contrast_threshold(scene, automatic, 0.01),
             kSiftContrastThreshold * kLeastFrameContrastShare * (1 - 1e-12))
@@ -112,7 +97,7 @@ TEST(FaintPrint, FramesSearchedForAFaintModelKeepTheirWeakerExtrema) {
 }
 
 TEST(FaintPrint, WashedOutCartonsAreFound) {
-  const Model faint = faint_model();
+  const Model faint = faint_box_model();
   const cv::Mat scene = faint_scene(faint);
   // Without the step: the picture's features and the frame's at SIFT's usual threshold.
   Model usual = faint;
@@ -130,7 +115,7 @@ TEST(FaintPrint, WashedOutCartonsAreFound) {
 }
 
 TEST_F(FaintPrintFiles, AModelFilesCacheKeepsTheThreshold) {
-  const Model faint = faint_model();
+  const Model faint = faint_box_model();
   ASSERT_TRUE(cv::imwrite(path("faint.png"), faint.image));
   Model on_disk = faint;
   on_disk.image_path = path("faint.png");

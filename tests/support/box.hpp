@@ -24,6 +24,24 @@ inline const Model& box_model() {
   return model;
 }
 
+/// The box's print washed out towards white (its darkest level 255 - 0.75 * 255), as a white
+/// glossy carton with pale print gives.
+inline cv::Mat washed_out(const cv::Mat& grey) {
+  cv::Mat out;
+  grey.convertTo(out, CV_8U, 0.25, 255 * (1 - 0.25));
+  return out;
+}
+
+/// The box model with its picture washed out, its features found as the loaders find them (at a
+/// lowered threshold: faint print).
+inline Model faint_box_model() {
+  Model m = box_model();
+  m.image = washed_out(box_model().image);
+  m.colour.release();
+  compute_model_features(m);
+  return m;
+}
+
 inline const Detector& box_detector() {
   static const Detector detector({box_model()});
   return detector;
