@@ -94,10 +94,6 @@ struct Instance {
   int pick_order = 0;       ///< 1 = pick first among the pickable instances; 0 = not pickable.
   cv::Point2f grasp;        ///< The model's grasp point in the scene.
   double grasp_angle = 0.0; ///< Gripper angle in degrees (the instance's angle).
-  /// Completed by guided matching from a hypothesis of two or three votes (a model of faint
-  /// print): its support pairs keypoints by descriptor where its pose puts them, not by the
-  /// ratio test.
-  bool guided = false;
 };
 
 /// Time spent in each stage of one detection, in milliseconds.
