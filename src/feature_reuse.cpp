@@ -310,13 +310,16 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   // Each instance's motion, followed on its own pixels: the instances in parallel (ECC is most
   // of a belt frame's cost), each into its own slot, gathered in order below.
   std::vector<std::optional<Moved>> follow(detection_.instances.size());
+  std::vector<char> still(detection_.instances.size(), 0);
   cv::parallel_for_(cv::Range(0, static_cast<int>(follow.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
       const size_t n = static_cast<size_t>(i);
       const Instance& instance = detection_.instances[n];
       const cv::Rect before = box_of(instance.outline) & frame;
-      if (cv::countNonZero(changed(block_box(before))) == 0)
+      if (cv::countNonZero(changed(block_box(before))) == 0) {
+        still[n] = 1;
         continue; // Still: its keypoints stay as they are.
+      }
       if (!in_view(instance, grey.size()))
         continue; // Its blocks are extracted again.
       // Measured from the whole frame its keypoints came from when it was followed from there,
@@ -450,12 +453,18 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   detection_ = detector.detect(grey, features_, matches_, s, colour);
   detection_.timings.features_ms = features_ms;
   detection_.timings.matching_ms = matching_ms;
-  // Each instance's motion, for the next frame: that of the last frame's instance it is (one
-  // that lay still kept its own).
+  // Each instance's motion, for the next frame: that of the last frame's instance it is. One
+  // that lay still keeps its own; one that was not followed (too little of it in view, or its
+  // step not measured) was found again from keypoints extracted in this frame: its motion
+  // starts here, not from the whole frame.
   for (size_t n = 0; n < last_instances.size(); ++n)
     if (std::none_of(moved.begin(), moved.end(),
                      [&](const Moved& m) { return m.instance == &last_instances[n]; }))
-      moved.push_back({&last_instances[n], cv::Point2f(), {}, {}, last_motions[n].since_whole});
+      moved.push_back({&last_instances[n],
+                       cv::Point2f(),
+                       {},
+                       {},
+                       still[n] ? last_motions[n].since_whole : std::nullopt});
   motions_.assign(detection_.instances.size(), Motion{});
   for (size_t n = 0; n < detection_.instances.size(); ++n) {
     const Instance& now = detection_.instances[n];

@@ -186,3 +186,30 @@ TEST(FeatureReuse, IntervalOneDetectsEveryFrameWhole) {
 }
 
 } // namespace
+
+TEST(FeatureReuse, BoxEnteringFromTheEdgeIsFollowedFromWhereItWasFoundAgain) {
+  // A box rides in from the left edge, 10 px a frame. The whole frame finds it with a fifth of
+  // it in view; while less than kLeastInFrame of it is in view its blocks are extracted again
+  // and it is found again from those keypoints; once it is followed, its motion must be
+  // measured from the frame they came from, not from the whole frame where it lay farther left
+  // (before: found 20 px ahead of where it is).
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(30);
+  const Pose still{{700.f, 250.f}, 100.0, 0.55};
+  for (int frame = 0; frame < 16; ++frame) {
+    const Pose riding{{-100.f + 10.f * frame, 480.f}, 10.0, 1.2};
+    const cv::Mat grey = scene_with({riding, still}, frame + 1);
+    const Detection got = reuse.detect(detector, grey, Settings());
+    const Detection want = detector.detect(grey, Settings());
+    for (const Instance& w : want.instances) {
+      const auto near = std::min_element(
+          got.instances.begin(), got.instances.end(), [&](const Instance& a, const Instance& b) {
+            return cv::norm(a.center - w.center) < cv::norm(b.center - w.center);
+          });
+      ASSERT_NE(near, got.instances.end()) << "frame " << frame;
+      EXPECT_LE(cv::norm(near->center - w.center), 1.0)
+          << "frame " << frame << ": instance at (" << w.center.x << ", " << w.center.y
+          << ") found at (" << near->center.x << ", " << near->center.y << ")";
+    }
+  }
+}
