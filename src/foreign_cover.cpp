@@ -38,15 +38,6 @@ struct CellSums {
   double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0, lf = 0, lm = 0;
 };
 
-/// One cell's figures: band-passed detail (standard deviations), correlation, grey levels.
-struct CellLook {
-  bool compared = false; ///< Enough pixels, and the model's picture has texture there.
-  /// Enough pixels, the model's picture plain there, and the frame shows detail
-  /// (kMinDetailOverPlain).
-  bool detail_over_plain = false;
-  double detail_f = 0, detail_m = 0, correlation = 0, level_f = 0, level_m = 0;
-};
-
 std::vector<cv::Point> mapped(const std::vector<cv::Point2f>& outline, const cv::Matx33d& map) {
   std::vector<cv::Point> out;
   out.reserve(outline.size());
@@ -70,11 +61,14 @@ cv::Mat detail_of(const cv::Mat& grey) {
 
 } // namespace
 
-int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                        const std::vector<const Instance*>& above) {
+CellComparison compare_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
+                             const std::vector<const Instance*>& above, const cv::Rect& within) {
+  CellComparison out;
   if (grey.empty() || model.image.empty() || inst.outline.size() < 3)
-    return 0;
-  const cv::Rect seen = cv::boundingRect(inst.outline) & cv::Rect(0, 0, grey.cols, grey.rows);
+    return out;
+  cv::Rect seen = cv::boundingRect(inst.outline) & cv::Rect(0, 0, grey.cols, grey.rows);
+  if (!within.empty())
+    seen &= within;
   // Whole shrunk pixels and whole cells only.
   const int cell = kCoverCell / kShrink;
   const cv::Rect box(seen.x, seen.y, seen.width / kShrink * kShrink,
@@ -82,7 +76,7 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
   const cv::Size size(box.width / kShrink, box.height / kShrink);
   const int columns = size.width / cell, rows = size.height / cell;
   if (columns <= 0 || rows <= 0)
-    return 0;
+    return out;
   // Frame pixels to shrunk ones: pixel j of the shrunk picture averages frame pixels
   // kShrink * j ... kShrink * j + kShrink - 1 (centres on whole numbers).
   const double k = 1.0 / kShrink, half = 0.5 * (kShrink - 1) * k;
@@ -161,10 +155,41 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
         level_ratios.push_back(l.level_f / l.level_m);
     }
   }
+  out.origin = box.tl();
+  out.rows = rows;
+  out.columns = columns;
+  out.looks = std::move(looks);
+  out.print_cells = static_cast<int>(detail_ratios.size());
   // How much of the print's detail and light this frame shows where the print is seen (blur,
   // exposure): the median over the cells that match.
-  const bool seen_enough = static_cast<int>(detail_ratios.size()) >= kMinForeignCells;
-  const double detail_kept = median(detail_ratios), light = median(level_ratios);
+  out.detail_kept = median(detail_ratios);
+  out.light = median(level_ratios);
+  return out;
+}
+
+bool denies_print(const CellLook& l, const CellComparison& cmp) {
+  if (!l.compared)
+    return false;
+  if (l.detail_f >= kMinFrameTexture)
+    return l.correlation < kMaxForeignCorrelation;
+  // Flat where the print, as this frame shows it elsewhere, would have clear detail, and not
+  // brighter than the print there: a plain surface lies on it. Brighter is a highlight washing
+  // the print out (or a white surface: it cannot be told).
+  return cmp.print_cells >= kMinForeignCells &&
+         cmp.detail_kept * l.detail_m >= kFlatCoverDetail * kMinFrameTexture &&
+         l.detail_f <= kFlatCoverShare * cmp.detail_kept * l.detail_m &&
+         l.level_f <= cmp.light * (l.level_m + kGlareLevels);
+}
+
+int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
+                        const std::vector<const Instance*>& above) {
+  const CellComparison cmp = compare_cells(inst, model, grey, above);
+  const int rows = cmp.rows, columns = cmp.columns;
+  if (rows <= 0 || columns <= 0)
+    return 0;
+  const std::vector<CellLook>& looks = cmp.looks;
+  const bool seen_enough = cmp.print_cells >= kMinForeignCells;
+  const double detail_kept = cmp.detail_kept, light = cmp.light;
 
   cv::Mat foreign = cv::Mat::zeros(rows, columns, CV_8UC1);
   for (int r = 0; r < rows; ++r)
@@ -178,17 +203,7 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
           foreign.at<uchar>(r, c) = 255;
         continue;
       }
-      bool other = false;
-      if (l.detail_f >= kMinFrameTexture)
-        other = l.correlation < kMaxForeignCorrelation;
-      else if (seen_enough)
-        // Flat where the print, as this frame shows it elsewhere, would have clear detail, and
-        // not brighter than the print there: a plain surface lies on it. Brighter is a
-        // highlight washing the print out (or a white surface: it cannot be told).
-        other = detail_kept * l.detail_m >= kFlatCoverDetail * kMinFrameTexture &&
-                l.detail_f <= kFlatCoverShare * detail_kept * l.detail_m &&
-                l.level_f <= light * (l.level_m + kGlareLevels);
-      if (other)
+      if (denies_print(l, cmp))
         foreign.at<uchar>(r, c) = 255;
     }
 

@@ -52,6 +52,44 @@ constexpr int kMinForeignCells = 4;
 constexpr int kMinForeignInGroup = 3;
 constexpr int kMinMixedGroupCells = 5;
 
+/// One cell's figures: band-passed detail (standard deviations), correlation, grey levels.
+struct CellLook {
+  bool compared = false; ///< Enough pixels, and the model's picture has texture there.
+  /// Enough pixels, the model's picture plain there, and the frame shows detail
+  /// (kMinDetailOverPlain).
+  bool detail_over_plain = false;
+  double detail_f = 0, detail_m = 0, correlation = 0, level_f = 0, level_m = 0;
+};
+
+/// The instance's print, carried into the frame by its homography, compared with the frame
+/// cell by cell (kCoverCell frame pixels, row by row).
+struct CellComparison {
+  /// Cell (r, c) covers frame pixels origin + kCoverCell * (c, r) to kCoverCell further.
+  cv::Point origin;
+  int rows = 0, columns = 0;
+  std::vector<CellLook> looks;
+  /// Compared cells where the frame shows the print (correlation at least
+  /// kMaxForeignCorrelation).
+  int print_cells = 0;
+  /// Medians over those cells: the frame's detail over the picture's (blur), and its grey
+  /// levels over the picture's (exposure).
+  double detail_kept = 0, light = 0;
+};
+
+/// The comparison behind foreign_cover_cells (see there): cells outside the frame, outside the
+/// model's mask, near the edge of what is seen of it, under one of `above` or clipped are not
+/// compared. A non-empty `within` (frame pixels) limits the comparison to that rectangle.
+CellComparison compare_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
+                             const std::vector<const Instance*>& above,
+                             const cv::Rect& within = cv::Rect());
+
+/// Whether a compared cell of `cmp` shows something other than the print: textured and
+/// correlating under kMaxForeignCorrelation, or flat where the print, with as much of its detail
+/// as the frame keeps where it is seen, would show clearly and no highlight washes it out
+/// (kFlatCoverDetail, kFlatCoverShare, kGlareLevels). A flat cell in a dim or blurred frame,
+/// where the print keeps little detail anywhere, denies nothing.
+bool denies_print(const CellLook& look, const CellComparison& cmp);
+
 /// The largest 4-connected group of cells where the frame does not show the instance's print,
 /// among the groups that show enough of something else (kMinForeignCells): the
 /// model's picture, carried into the frame by the instance's homography, and the frame are
