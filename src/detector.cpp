@@ -252,7 +252,7 @@ Detection Detector::detect_matched(const Features& scene, const std::vector<Matc
     // before they compete for the frame's keypoints.
     if (!colour.empty())
       detail::decide_by_colour(result.instances, models_, colour);
-    detail::explain_scene(result.instances, models_, scene, s.features, fewest);
+    detail::explain_scene(result.instances, models_, scene, s.features, fewest, grey);
     detail::drop_look_alikes(result.instances, fewest / 2 + fewest % 2); // half, rounded up
     drop_hidden_instances(result.instances, models_, s.features);
   }
