@@ -149,7 +149,7 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
     if (l.detail_f < kMinFrameTexture)
       continue;
     l.correlation = (s.fm / s.n - mf * mm) / (l.detail_f * l.detail_m);
-    if (l.correlation >= kMaxForeignCorrelation) { // the print, as the model shows it
+    if (shows_print(l)) {
       detail_ratios.push_back(l.detail_f / l.detail_m);
       if (l.level_m > 0.0)
         level_ratios.push_back(l.level_f / l.level_m);
@@ -165,6 +165,10 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
   out.detail_kept = median(detail_ratios);
   out.light = median(level_ratios);
   return out;
+}
+
+bool shows_print(const CellLook& l) {
+  return l.compared && l.detail_f >= kMinFrameTexture && l.correlation >= kMaxForeignCorrelation;
 }
 
 bool denies_print(const CellLook& l, const CellComparison& cmp) {

@@ -68,8 +68,7 @@ struct CellComparison {
   cv::Point origin;
   int rows = 0, columns = 0;
   std::vector<CellLook> looks;
-  /// Compared cells where the frame shows the print (correlation at least
-  /// kMaxForeignCorrelation).
+  /// Cells where the frame shows the print (shows_print).
   int print_cells = 0;
   /// Medians over those cells: the frame's detail over the picture's (blur), and its grey
   /// levels over the picture's (exposure).
@@ -82,6 +81,10 @@ struct CellComparison {
 CellComparison compare_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
                              const std::vector<const Instance*>& above,
                              const cv::Rect& within = cv::Rect());
+
+/// Whether a cell shows the print: compared, textured in the frame, and correlating at
+/// kMaxForeignCorrelation or more with the picture carried there.
+bool shows_print(const CellLook& look);
 
 /// Whether a compared cell of `cmp` shows something other than the print: textured and
 /// correlating under kMaxForeignCorrelation, or flat where the print, with as much of its detail

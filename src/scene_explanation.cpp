@@ -186,8 +186,7 @@ public:
       for (int r = 0; r < cells.rows; ++r)
         for (int c = 0; c < cells.columns; ++c) {
           const CellLook& look = cells.looks[static_cast<size_t>(r) * cells.columns + c];
-          if (look.compared && look.detail_f >= kMinFrameTexture &&
-              look.correlation >= kMaxForeignCorrelation)
+          if (shows_print(look))
             shown_(cv::Rect(cells.origin.x + c * kCoverCell, cells.origin.y + r * kCoverCell,
                             kCoverCell, kCoverCell) &
                    frame)
@@ -204,8 +203,9 @@ private:
 /// Whether instance `i` shows its print in the frame where it is seen (kMinPrintShare); cells
 /// where a kept instance's print shows tell nothing about it (it may lie under that instance);
 /// true when too little of it tells.
-bool shows_print(const std::vector<Instance>& instances, size_t i, const std::vector<char>& keep,
-                 const std::vector<Model>& models, const cv::Mat& grey, ShownPrint& shown) {
+bool instance_shows_print(const std::vector<Instance>& instances, size_t i,
+                          const std::vector<char>& keep, const std::vector<Model>& models,
+                          const cv::Mat& grey, ShownPrint& shown) {
   const cv::Mat& others = shown.around(instances, i, keep, models, grey);
   const CellComparison cells = compare_cells(instances[i], models[instances[i].model], grey, {});
   int print = 0, denied = 0;
@@ -217,7 +217,7 @@ bool shows_print(const std::vector<Instance>& instances, size_t i, const std::ve
       if (!look.compared ||
           (middle.inside(cv::Rect(0, 0, others.cols, others.rows)) && others.at<uchar>(middle)))
         continue;
-      if (look.detail_f >= kMinFrameTexture && look.correlation >= kMaxForeignCorrelation)
+      if (shows_print(look))
         ++print;
       else
         denied += denies_print(look, cells);
@@ -291,7 +291,7 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
         static_cast<double>(explains[i].size()) < kMinExplainedShare * on_outline[i])
       continue;
     if (!grey.empty() && explains[i].size() < kPixelCheckBelow &&
-        !shows_print(instances, i, keep, models, grey, shown))
+        !instance_shows_print(instances, i, keep, models, grey, shown))
       continue;
     keep[i] = 1;
     for (int s : explains[i])

@@ -17,9 +17,9 @@ namespace pickdetect::detail {
 /// is kept only when it still explains at least `min_matches` keypoints of its own, nearly all
 /// of those it explains are its own, and they spread over enough of the model to place it; one
 /// that rests on few matches must also explain more than the chance share of the keypoints on
-/// its outline (a few agree by chance wherever the frame is dense with print), and every
-/// instance must show its print in the frame's pixels where it is seen (`grey`, the frame as
-/// CV_8UC1; empty: no such test). A copy
+/// its outline (a few agree by chance wherever the frame is dense with print); one that explains
+/// few keypoints must also show its print in the frame's pixels where it is seen (`grey`, the
+/// frame as CV_8UC1; empty: no such test). A copy
 /// of an instance shifted along a repeated design, a second pose of one object and an instance
 /// spanning two neighbours rest on keypoints that a better instance explains, and lose to it.
 void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& models,
