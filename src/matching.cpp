@@ -8,6 +8,8 @@
 #include <opencv2/flann.hpp>
 
 #include <algorithm>
+#include <cstdlib>
+#include <map>
 #include <mutex>
 
 namespace pickdetect {
@@ -19,6 +21,13 @@ constexpr int kKdChecks = 32;
 /// FLANN draws the trees' split dimensions from the C library's rand(): seeding it right before
 /// the build, under a lock, makes the same models give the same trees in every run.
 constexpr unsigned kKdSeed = 20240101u;
+/// Repeat shifts: offsets between copies are gathered in square bins of this side (model
+/// pixels), and an offset counts as a shift of the design when the bin and its eight
+/// neighbours hold at least kMinShiftShare of the model's keypoints (its views' included) and
+/// at least kMinShiftPairs pairs: a few letters or motifs printed twice are no repeated design.
+constexpr float kShiftBinPx = 6.f;
+constexpr double kMinShiftShare = 0.05;
+constexpr int kMinShiftPairs = 20;
 /// Scene descriptors are searched in blocks of this many rows, in parallel.
 constexpr int kSearchBlock = 256;
 /// Ambiguity::Share: neighbours searched per scene descriptor (two per model, at most this).
@@ -45,6 +54,55 @@ int find_root(std::vector<int>& parent, int i) {
 std::mutex& flann_build_lock() {
   static std::mutex lock;
   return lock;
+}
+
+} // namespace
+
+namespace {
+
+/// The offsets between copies (`pairs`, model pixels) that many pairs share, strongest first
+/// (see kShiftBinPx): the mean offset around each peak bin, peaks at least two bins apart.
+std::vector<cv::Point2f> shifts_of(const std::vector<cv::Point2f>& pairs, int rows) {
+  std::map<std::pair<int, int>, std::vector<int>> bins;
+  for (size_t i = 0; i < pairs.size(); ++i)
+    bins[{cvFloor(pairs[i].x / kShiftBinPx), cvFloor(pairs[i].y / kShiftBinPx)}].push_back(
+        static_cast<int>(i));
+  struct Peak {
+    std::pair<int, int> bin;
+    size_t count;
+    cv::Point2f mean;
+  };
+  std::vector<Peak> peaks;
+  for (const auto& [bin, members] : bins) {
+    size_t count = 0;
+    cv::Point2f sum(0.f, 0.f);
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        auto near = bins.find({bin.first + dx, bin.second + dy});
+        if (near == bins.end())
+          continue;
+        count += near->second.size();
+        for (int i : near->second)
+          sum += pairs[static_cast<size_t>(i)];
+      }
+    if (count >= static_cast<size_t>(kMinShiftPairs) && count >= kMinShiftShare * rows)
+      peaks.push_back({bin, count, sum / static_cast<float>(count)});
+  }
+  std::stable_sort(peaks.begin(), peaks.end(),
+                   [](const Peak& a, const Peak& b) { return a.count > b.count; });
+  std::vector<cv::Point2f> out;
+  std::vector<std::pair<int, int>> taken;
+  for (const Peak& p : peaks) {
+    bool apart = true;
+    for (const auto& t : taken)
+      apart =
+          apart && (std::abs(t.first - p.bin.first) > 2 || std::abs(t.second - p.bin.second) > 2);
+    if (!apart)
+      continue;
+    taken.push_back(p.bin);
+    out.push_back(p.mean);
+  }
+  return out;
 }
 
 } // namespace
@@ -150,6 +208,25 @@ void Matcher::find_repeats(const std::vector<Model>& models) {
     if (taken.size() > 1)
       copies_[i] = std::move(taken);
   }
+  shifts_.assign(models.size(), {});
+  for (size_t m = 0; m < models.size(); ++m) {
+    const int first = offset_[m];
+    const int rows = (m + 1 < offset_.size() ? offset_[m + 1] : n) - first;
+    std::vector<cv::Point2f> pairs;
+    for (int i = first; i < first + rows; ++i)
+      for (int c : copies_[i])
+        if (c != i)
+          for (float way : {1.f, -1.f}) // both ways: the copies of a row are not symmetric
+            pairs.push_back(way * (keypoint_[c].pt - keypoint_[i].pt));
+    shifts_[m] = shifts_of(pairs, rows);
+  }
+}
+
+const std::vector<cv::Point2f>& Matcher::repeat_shifts(int model) const {
+  static const std::vector<cv::Point2f> none;
+  return model >= 0 && static_cast<size_t>(model) < shifts_.size()
+             ? shifts_[static_cast<size_t>(model)]
+             : none;
 }
 
 bool Matcher::same_place(int a, int b) const {

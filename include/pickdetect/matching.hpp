@@ -54,6 +54,11 @@ public:
 
   bool empty() const { return descriptors_.empty(); }
 
+  /// Repeated designs: the shifts, in model picture pixels, that carry a printed part of model
+  /// `model` onto a copy of it (each copy's offset, both ways: a bundle of four packs side by
+  /// side has three each way), found when the matcher was built. Empty when nothing repeats.
+  const std::vector<cv::Point2f>& repeat_shifts(int model) const;
+
 private:
   /// The k nearest model descriptors of each query row (indices, -1 where none; L2 or Hamming
   /// distances).
@@ -81,6 +86,7 @@ private:
   std::shared_ptr<cv::flann::Index> index_;
   std::vector<int> group_;               ///< Row -> its repeat group (itself when unrepeated).
   std::vector<std::vector<int>> copies_; ///< Row -> the rows of its group (empty: none).
+  std::vector<std::vector<cv::Point2f>> shifts_; ///< Model index -> repeat_shifts.
   int largest_group_ = 1;
 };
 

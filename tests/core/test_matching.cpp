@@ -93,3 +93,28 @@ TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
       << shared << " of " << exact.size() << " exact matches kept";
   EXPECT_EQ(fast.size(), matcher.match(f.descriptors, 0.8, Search::KdTree).size());
 }
+
+TEST(Matcher, ARepeatedDesignHasTheShiftsBetweenItsCopies) {
+  const Model box = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  Model bundle;
+  bundle.name = "bundle";
+  cv::hconcat(std::vector<cv::Mat>(3, box.image), bundle.image);
+  const float w = static_cast<float>(bundle.image.cols), h = static_cast<float>(bundle.image.rows);
+  bundle.principal_points = {{w / 2, h / 2}, {0, 0}, {w, 0}, {w, h}, {0, h}};
+  bundle.outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
+  compute_model_features(bundle);
+  const Matcher matcher({box, bundle});
+  // box.png alone repeats nothing worth a shift.
+  EXPECT_TRUE(matcher.repeat_shifts(0).empty());
+  // Three packs side by side: a pack's width and two, both ways, and nothing else.
+  const float pack = static_cast<float>(box.image.cols);
+  const std::vector<cv::Point2f>& shifts = matcher.repeat_shifts(1);
+  EXPECT_EQ(shifts.size(), 4u);
+  for (float expected : {-2 * pack, -pack, pack, 2 * pack}) {
+    bool found = false;
+    for (const cv::Point2f& s : shifts)
+      found = found || std::hypot(s.x - expected, s.y) < 2.0;
+    EXPECT_TRUE(found) << "no shift of (" << expected << ", 0)";
+  }
+  EXPECT_TRUE(matcher.repeat_shifts(2).empty()) << "no third model";
+}
