@@ -5,6 +5,7 @@
 #include "colour_decision.hpp"
 #include "look_alikes.hpp"
 #include "model_scene.hpp"
+#include "repeat_placement.hpp"
 #include "scene_explanation.hpp"
 #include "stopwatch.hpp"
 
@@ -253,6 +254,9 @@ Detection Detector::detect_matched(const Features& scene, const std::vector<Matc
     if (!colour.empty())
       detail::decide_by_colour(result.instances, models_, colour);
     detail::explain_scene(result.instances, models_, scene, s.features, fewest, grey);
+    detail::place_repeated_designs(
+        result.instances, models_,
+        s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift, grey);
     detail::drop_look_alikes(result.instances, fewest / 2 + fewest % 2); // half, rounded up
     drop_hidden_instances(result.instances, models_, s.features);
   }

@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
+#include <cmath>
+#include <string>
 #include <vector>
 
 using namespace pickdetect;
@@ -71,3 +73,29 @@ TEST(RepeatedDesign, TwoBundlesSideBySideAreEachFoundOnce) {
 }
 
 } // namespace
+
+TEST(RepeatedDesign, ABundleRunningOutOfTheFrameIsPlacedWhereItsPacksAre) {
+  // A bundle of four packs lying across the frame's left or right edge, one pack outside: the
+  // three packs in view fit two places equally well, the true one and one shifted a pack
+  // inwards, whose fourth pack would lie on the empty belt. The frame's pixels decide.
+  const Model bundle = bundle_model(4);
+  const Detector detector({bundle});
+  const cv::Size frame(640, 480);
+  for (double scale : {0.3, 0.36})
+    for (double angle : {0.0, 200.0})
+      for (bool left : {true, false}) {
+        cv::Mat scene = test_scene::plain_background(frame, 100);
+        const double along_x = bundle.image.cols * scale * std::abs(std::cos(angle * CV_PI / 180));
+        // The centre a quarter of the bundle's width in from the edge: one pack outside.
+        const float x = static_cast<float>(left ? 0.25 * along_x : frame.width - 0.25 * along_x);
+        test_scene::paste(scene, bundle.image, {{{x, 240.f}, angle, scale}});
+        const Detection d = detector.detect(scene);
+        const std::string where = "scale " + std::to_string(scale) + ", angle " +
+                                  std::to_string(angle) + (left ? ", left edge" : ", right edge");
+        ASSERT_EQ(d.instances.size(), 1u) << where;
+        const Instance& inst = d.instances[0];
+        EXPECT_LT(std::hypot(inst.center.x - x, inst.center.y - 240.f), 1.5)
+            << where << ": expected the centre at (" << x << ", 240), got (" << inst.center.x
+            << ", " << inst.center.y << ")";
+      }
+}

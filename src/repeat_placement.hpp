@@ -1,0 +1,36 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Internal to the core: an instance of a repeated design placed where all its parts agree.
+#pragma once
+
+#include <pickdetect/detector.hpp>
+#include <pickdetect/matching.hpp>
+#include <pickdetect/model.hpp>
+
+#include <opencv2/core.hpp>
+
+#include <vector>
+
+namespace pickdetect::detail {
+
+/// A candidate place must show something other than the print (denies_print) in at least this
+/// many fewer cells than the instance's own place, and kMinShiftGainShare of the cells where
+/// its own place shows the print: a copy predicted where the belt, the tote or another object
+/// lies denies a whole part's cells; noise and glare deny a few in any place.
+constexpr int kMinShiftGainCells = 6;
+constexpr double kMinShiftGainShare = 0.05;
+/// A candidate place must keep this share of the instance's supporting keypoints on its outline.
+constexpr double kMinShiftSupportShare = 0.9;
+
+/// A match to a repeated part votes for every place it could mean; where a part of the design is
+/// hidden (out of the frame, under something) or the votes of neighbouring copies tie, the
+/// instance can come out shifted by a copy or more along the design, its outline running past
+/// the object's end. For each instance of a model with repeat shifts (`matcher`'s
+/// repeat_shifts, model pixels), the instance is moved by each shift that keeps its
+/// supporting keypoints on it, and the place where the frame's pixels show the least of
+/// anything else is kept: the true place predicts print only where the
+/// object is, a shifted one predicts a copy where the belt, the tote or another object shows.
+/// `grey`: the frame, CV_8UC1; empty: nothing is moved.
+void place_repeated_designs(std::vector<Instance>& instances, const std::vector<Model>& models,
+                            const Matcher& matcher, const cv::Mat& grey);
+
+} // namespace pickdetect::detail
