@@ -56,10 +56,6 @@ std::mutex& flann_build_lock() {
   return lock;
 }
 
-} // namespace
-
-namespace {
-
 /// The offsets between copies (`pairs`, model pixels) that many pairs share, strongest first
 /// (see kShiftBinPx): the mean offset around each peak bin, peaks at least two bins apart.
 std::vector<cv::Point2f> shifts_of(const std::vector<cv::Point2f>& pairs, int rows) {
