@@ -14,18 +14,21 @@
 namespace pickdetect::detail {
 namespace {
 
-/// Cells where the frame shows something other than the print (denies_print), `others` (the
-/// other instances, which may lie on it) left out; `shown`: those where it shows the print.
-int denied_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                 const std::vector<const Instance*>& others, int& shown) {
+/// How the frame shows an instance's print, `others` (the other instances, which may lie on it)
+/// left out: cells where it shows the print, and where it shows something else (denies_print).
+struct PrintCells {
+  int shown = 0, denied = 0;
+};
+
+PrintCells print_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
+                       const std::vector<const Instance*>& others) {
   const CellComparison cmp = compare_cells(inst, model, grey, others);
-  shown = 0;
-  int denied = 0;
+  PrintCells out;
   for (const CellLook& look : cmp.looks) {
-    shown += shows_print(look) ? 1 : 0;
-    denied += denies_print(look, cmp) ? 1 : 0;
+    out.shown += shows_print(look) ? 1 : 0;
+    out.denied += denies_print(look, cmp) ? 1 : 0;
   }
-  return denied;
+  return out;
 }
 
 Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& shift) {
@@ -58,18 +61,16 @@ void place_repeated_designs(std::vector<Instance>& instances, const std::vector<
       for (size_t j = 0; j < instances.size(); ++j)
         if (j != static_cast<size_t>(i))
           others.push_back(&instances[j]);
-      int shown = 0;
-      const int own = denied_cells(inst, model, grey, others, shown);
+      const PrintCells own = print_cells(inst, model, grey, others);
       const int need = static_cast<int>(
-          std::ceil(std::max<double>(kMinShiftGainCells, kMinShiftGainShare * shown)));
+          std::ceil(std::max<double>(kMinShiftGainCells, kMinShiftGainShare * own.shown)));
       const double support = static_cast<double>(inst.support.size());
-      int best = own - need + 1;
+      int best = own.denied - need + 1;
       for (const cv::Point2f& shift : shifts) {
         Instance candidate = shifted(inst, model, shift);
         if (count_inside(inst.support, candidate.outline) < kMinShiftSupportShare * support)
           continue;
-        int candidate_shown = 0;
-        const int denied = denied_cells(candidate, model, grey, others, candidate_shown);
+        const int denied = print_cells(candidate, model, grey, others).denied;
         if (denied < best) {
           best = denied;
           moved[static_cast<size_t>(i)] = std::move(candidate);

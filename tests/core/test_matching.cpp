@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Matching: the 2NN ratio test over all models at once, look-alike features rejected or shared,
 // kd-tree against brute force.
+#include "../support/box.hpp"
 #include "common/scene.hpp"
 
 #include <pickdetect/matching.hpp>
@@ -95,14 +96,8 @@ TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
 }
 
 TEST(Matcher, ARepeatedDesignHasTheShiftsBetweenItsCopies) {
-  const Model box = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
-  Model bundle;
-  bundle.name = "bundle";
-  cv::hconcat(std::vector<cv::Mat>(3, box.image), bundle.image);
-  const float w = static_cast<float>(bundle.image.cols), h = static_cast<float>(bundle.image.rows);
-  bundle.principal_points = {{w / 2, h / 2}, {0, 0}, {w, 0}, {w, h}, {0, h}};
-  bundle.outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
-  compute_model_features(bundle);
+  const Model& box = test_scene::box_model();
+  const Model bundle = test_scene::bundle_model(3);
   const Matcher matcher({box, bundle});
   // box.png alone repeats nothing worth a shift.
   EXPECT_TRUE(matcher.repeat_shifts(0).empty());

@@ -14,24 +14,10 @@
 #include <vector>
 
 using namespace pickdetect;
-using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::bundle_model;
 using pickdetect::test_scene::Pose;
 
 namespace {
-
-/// A bundle of `packs` box.png pictures side by side, as one model.
-Model bundle_model(int packs) {
-  Model m;
-  m.name = "bundle";
-  std::vector<cv::Mat> row(packs, box_model().image);
-  cv::hconcat(row, m.image);
-  m.mask = cv::Mat(m.image.size(), CV_8UC1, cv::Scalar(255));
-  const float w = static_cast<float>(m.image.cols), h = static_cast<float>(m.image.rows);
-  m.principal_points = {{w / 2, h / 2}, {0, 0}, {w, 0}, {w, h}, {0, h}};
-  m.outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
-  compute_model_features(m);
-  return m;
-}
 
 TEST(RepeatedDesign, ABundleOfIdenticalPacksIsFoundWhereAllItsPacksAgree) {
   const Model bundle = bundle_model(3);
@@ -72,8 +58,6 @@ TEST(RepeatedDesign, TwoBundlesSideBySideAreEachFoundOnce) {
   }
 }
 
-} // namespace
-
 TEST(RepeatedDesign, ABundleRunningOutOfTheFrameIsPlacedWhereItsPacksAre) {
   // A bundle of four packs lying across the frame's left or right edge, one pack outside: the
   // three packs in view fit two places equally well, the true one and one shifted a pack
@@ -99,3 +83,5 @@ TEST(RepeatedDesign, ABundleRunningOutOfTheFrameIsPlacedWhereItsPacksAre) {
             << ", " << inst.center.y << ")";
       }
 }
+
+} // namespace

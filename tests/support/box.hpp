@@ -5,9 +5,11 @@
 
 #include <pickdetect/pickdetect.hpp>
 
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <string>
+#include <vector>
 
 namespace pickdetect::test_scene {
 
@@ -38,6 +40,20 @@ inline Model faint_box_model() {
   Model m = box_model();
   m.image = washed_out(box_model().image);
   m.colour.release();
+  compute_model_features(m);
+  return m;
+}
+
+/// A bundle of `packs` box.png pictures side by side, as one model (a repeated design).
+inline Model bundle_model(int packs) {
+  Model m;
+  m.name = "bundle";
+  std::vector<cv::Mat> row(packs, box_model().image);
+  cv::hconcat(row, m.image);
+  m.mask = cv::Mat(m.image.size(), CV_8UC1, cv::Scalar(255));
+  const float w = static_cast<float>(m.image.cols), h = static_cast<float>(m.image.rows);
+  m.principal_points = {{w / 2, h / 2}, {0, 0}, {w, 0}, {w, h}, {0, h}};
+  m.outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
   compute_model_features(m);
   return m;
 }
