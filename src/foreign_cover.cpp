@@ -33,10 +33,39 @@ constexpr int kClipped = 250;
 constexpr double kMinCellFill = 0.75;
 
 /// Per cell: compared pixels, sums of the band-passed frame f and model m (and their squares
-/// and product), and of the shrunk grey levels of both (lf, lm).
+/// and product), and of the shrunk grey levels of both (lf, lm); with colour, the pixels whose
+/// colour is compared (nc) and the sums of the frame's and the model's channels (BGR).
 struct CellSums {
   double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0, lf = 0, lm = 0;
+  double nc = 0;
+  cv::Vec3d cf, cm;
 };
+
+/// Hue (degrees) and saturation (the channels' spread over the largest) of a BGR colour.
+void hue_saturation(const cv::Vec3d& bgr, double& hue, double& saturation) {
+  const double hi = std::max({bgr[0], bgr[1], bgr[2]}), lo = std::min({bgr[0], bgr[1], bgr[2]});
+  saturation = hi > 0.0 ? (hi - lo) / hi : 0.0;
+  hue = std::atan2(0.8660254 * (bgr[1] - bgr[0]), bgr[2] - 0.5 * (bgr[1] + bgr[0])) * 180.0 / CV_PI;
+}
+
+/// Whether the frame's colour `f` in a cell is another than the print's `m` there (both BGR
+/// means, the frame's already scaled to the print's light): see kMaxHueTurn.
+bool colour_differs(const cv::Vec3d& f, const cv::Vec3d& m) {
+  const double level_f = (f[0] + f[1] + f[2]) / 3.0, level_m = (m[0] + m[1] + m[2]) / 3.0;
+  if (level_f < kMinColourLevel || level_m < kMinColourLevel)
+    return false;
+  double hue_f, sat_f, hue_m, sat_m;
+  hue_saturation(f, hue_f, sat_f);
+  hue_saturation(m, hue_m, sat_m);
+  if (sat_f >= kMinCellSaturation && sat_m >= kMinCellSaturation)
+    return std::abs(std::remainder(hue_f - hue_m, 360.0)) > kMaxHueTurn;
+  // Grey where the print has clear colour: a grey object, unless as light as the print or
+  // lighter (a highlight washes the print out towards white; a white object cannot be told
+  // from it).
+  if (sat_f < kGreySaturation && sat_m >= kClearSaturation)
+    return level_f < level_m;
+  return sat_m < kGreySaturation && sat_f >= kClearSaturation;
+}
 
 std::vector<cv::Point> mapped(const std::vector<cv::Point2f>& outline, const cv::Matx33d& map) {
   std::vector<cv::Point> out;
@@ -62,7 +91,8 @@ cv::Mat detail_of(const cv::Mat& grey) {
 } // namespace
 
 CellComparison compare_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                             const std::vector<const Instance*>& above, const cv::Rect& within) {
+                             const std::vector<const Instance*>& above, const cv::Rect& within,
+                             const cv::Mat& colour) {
   CellComparison out;
   if (grey.empty() || model.image.empty() || inst.outline.size() < 3)
     return out;
@@ -101,6 +131,17 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
       cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::Mat shrunk;
   cv::resize(grey(box), shrunk, size, 0, 0, cv::INTER_AREA);
+  // The colours, when the frame and the picture both have them, at the same size.
+  const bool in_colour = !colour.empty() && colour.type() == CV_8UC3 &&
+                         colour.size() == grey.size() && !model.colour.empty() &&
+                         model.colour.type() == CV_8UC3 &&
+                         model.colour.size() == model.image.size();
+  cv::Mat shrunk_colour, picture_colour;
+  if (in_colour) {
+    cv::resize(colour(box), shrunk_colour, size, 0, 0, cv::INTER_AREA);
+    cv::warpPerspective(model.colour, picture_colour, cv::Mat(to_box), size, cv::INTER_LINEAR,
+                        cv::BORDER_REPLICATE);
+  }
   // Clipped frame pixels (glare) show nothing of what lies there.
   mask.setTo(0, shrunk >= kClipped);
   const cv::Mat frame = detail_of(shrunk), carried = detail_of(picture);
@@ -112,11 +153,19 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
     const float* m = carried.ptr<float>(y);
     const uchar* lf = shrunk.ptr<uchar>(y);
     const uchar* lm = picture.ptr<uchar>(y); // model pictures are 8-bit grey
+    const cv::Vec3b* cf = in_colour ? shrunk_colour.ptr<cv::Vec3b>(y) : nullptr;
+    const cv::Vec3b* cm = in_colour ? picture_colour.ptr<cv::Vec3b>(y) : nullptr;
     CellSums* row = &cells[static_cast<size_t>(y / cell) * columns];
     for (int x = 0; x < columns * cell; ++x) {
       if (!in[x])
         continue;
       CellSums& c = row[x / cell];
+      // A channel at the top may be clipped: its colour is not the object's.
+      if (in_colour && cf[x][0] < kClipped && cf[x][1] < kClipped && cf[x][2] < kClipped) {
+        c.nc += 1;
+        c.cf += cv::Vec3d(cf[x][0], cf[x][1], cf[x][2]);
+        c.cm += cv::Vec3d(cm[x][0], cm[x][1], cm[x][2]);
+      }
       c.n += 1;
       c.f += f[x];
       c.m += m[x];
@@ -155,6 +204,29 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
         level_ratios.push_back(l.level_f / l.level_m);
     }
   }
+  if (in_colour) {
+    // The frame's channels scaled to the print's (the light's colour and gain): by the medians,
+    // over the cells, of their ratios.
+    std::vector<double> ratios[3];
+    for (const CellSums& c : cells)
+      if (c.nc >= min_fill)
+        for (int k = 0; k < 3; ++k)
+          if (c.cm[k] / c.nc >= kMinColourLevel)
+            ratios[k].push_back(c.cf[k] / c.cm[k]);
+    cv::Vec3d gain;
+    for (int k = 0; k < 3; ++k)
+      gain[k] = median(ratios[k]);
+    if (std::isfinite(gain[0]) && std::isfinite(gain[1]) && std::isfinite(gain[2]) &&
+        gain[0] > 0.0 && gain[1] > 0.0 && gain[2] > 0.0)
+      for (size_t i = 0; i < cells.size(); ++i) {
+        const CellSums& c = cells[i];
+        if (c.nc < min_fill)
+          continue;
+        const cv::Vec3d f = c.cf / c.nc, m = c.cm / c.nc;
+        looks[i].other_colour =
+            colour_differs(f, cv::Vec3d(m[0] * gain[0], m[1] * gain[1], m[2] * gain[2]));
+      }
+  }
   out.origin = box.tl();
   out.rows = rows;
   out.columns = columns;
@@ -186,8 +258,8 @@ bool denies_print(const CellLook& l, const CellComparison& cmp) {
 }
 
 int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                        const std::vector<const Instance*>& above) {
-  const CellComparison cmp = compare_cells(inst, model, grey, above);
+                        const std::vector<const Instance*>& above, const cv::Mat& colour) {
+  const CellComparison cmp = compare_cells(inst, model, grey, above, cv::Rect(), colour);
   const int rows = cmp.rows, columns = cmp.columns;
   if (rows <= 0 || columns <= 0)
     return 0;
@@ -199,6 +271,10 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < columns; ++c) {
       const CellLook& l = looks[static_cast<size_t>(r) * columns + c];
+      if (l.other_colour) { // Another colour than the print's, plain or printed.
+        foreign.at<uchar>(r, c) = 255;
+        continue;
+      }
       if (!l.compared) {
         // Texture where the print is plain, well beyond what the frame keeps of the print's
         // own faint detail there: a textured object lies on a plain part of the print.

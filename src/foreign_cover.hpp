@@ -52,6 +52,23 @@ constexpr int kMinForeignCells = 4;
 constexpr int kMinForeignInGroup = 3;
 constexpr int kMinMixedGroupCells = 5;
 
+/// Colour, where both the frame and the model's picture have it (compare_cells' `colour`): a
+/// cell shows something else where its hue is off the print's by more than kMaxHueTurn degrees,
+/// both holding at least kMinCellSaturation of colour (saturation: the channels' spread over
+/// the largest), or where one is grey (under kGreySaturation) and the other holds at least
+/// kClearSaturation, the grey one being the print or darker than the print (grey and as light
+/// or lighter is a highlight washing the print out, or a white object: they cannot be told
+/// apart). Cells darker than kMinColourLevel (mean of the three channels) on either side tell
+/// nothing. The frame's channels are first scaled to the print's, by their medians over the
+/// cells (the light's colour and gain). On the development sets, which light the frame at random,
+/// no uncovered instance had two such cells side by side; covers of another colour over plain
+/// print, which the grey comparison cannot see, made groups of 4-85 (docs/accuracy.md).
+constexpr double kMaxHueTurn = 45.0;
+constexpr double kMinCellSaturation = 0.25;
+constexpr double kGreySaturation = 0.08;
+constexpr double kClearSaturation = 0.4;
+constexpr double kMinColourLevel = 20.0;
+
 /// One cell's figures: band-passed detail (standard deviations), correlation, grey levels.
 struct CellLook {
   bool compared = false; ///< Enough pixels, and the model's picture has texture there.
@@ -59,6 +76,9 @@ struct CellLook {
   /// (kMinDetailOverPlain).
   bool detail_over_plain = false;
   double detail_f = 0, detail_m = 0, correlation = 0, level_f = 0, level_m = 0;
+  /// Enough pixels, and the frame's colour there is another than the print's (see kMaxHueTurn);
+  /// only when compare_cells is given the frame's colour.
+  bool other_colour = false;
 };
 
 /// The instance's print, carried into the frame by its homography, compared with the frame
@@ -77,10 +97,13 @@ struct CellComparison {
 
 /// The comparison behind foreign_cover_cells (see there): cells outside the frame, outside the
 /// model's mask, near the edge of what is seen of it, under one of `above` or clipped are not
-/// compared. A non-empty `within` (frame pixels) limits the comparison to that rectangle.
+/// compared. A non-empty `within` (frame pixels) limits the comparison to that rectangle. With
+/// `colour` (the frame in BGR, CV_8UC3 of the grey frame's size) and a model picture in colour,
+/// each cell's colour is compared too (CellLook::other_colour).
 CellComparison compare_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
                              const std::vector<const Instance*>& above,
-                             const cv::Rect& within = cv::Rect());
+                             const cv::Rect& within = cv::Rect(),
+                             const cv::Mat& colour = cv::Mat());
 
 /// Whether a cell shows the print: compared, textured in the frame, and correlating at
 /// kMaxForeignCorrelation or more with the picture carried there.
@@ -104,8 +127,11 @@ bool denies_print(const CellLook& look, const CellComparison& cmp);
 /// joins the group around it. Cells outside the frame,
 /// outside the model's mask, near the edge of what is seen of it, or under one of `above`
 /// (instances lying on this one) are not compared. Scattered single cells come from noise and
-/// glare; an object lying on the instance leaves a connected group. `grey`: the frame, CV_8UC1.
+/// glare; an object lying on the instance leaves a connected group. `grey`: the frame, CV_8UC1;
+/// `colour`, if not empty, the frame in BGR: a cell whose colour is another than the print's
+/// (CellLook::other_colour) also shows something else, wherever the print is, plain or not.
 int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                        const std::vector<const Instance*>& above);
+                        const std::vector<const Instance*>& above,
+                        const cv::Mat& colour = cv::Mat());
 
 } // namespace pickdetect::detail

@@ -91,15 +91,15 @@ double correlation(const Instance& inst, const Model& model, const cv::Mat& grey
 /// instances lying on it, `hidden` the area they hide, `area` its own (pixels). Writes only
 /// instance `i`, reads the others' outlines.
 void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Model>& models,
-                const cv::Rect& frame, const cv::Mat& grey, const std::vector<size_t>& above,
-                double hidden, double area) {
+                const cv::Rect& frame, const cv::Mat& grey, const cv::Mat& colour,
+                const std::vector<size_t>& above, double hidden, double area) {
   Instance& inst = instances[i];
   inst.covered = area <= 0.0 || hidden > kCoverTolerance * area;
   if (!inst.covered && !grey.empty()) {
     std::vector<const Instance*> on_it;
     for (size_t j : above)
       on_it.push_back(&instances[j]);
-    inst.covered = detail::foreign_cover_cells(inst, models[inst.model], grey, on_it) >=
+    inst.covered = detail::foreign_cover_cells(inst, models[inst.model], grey, on_it, colour) >=
                    detail::kMinForeignCells;
   }
   inst.visibility = 0.0;
@@ -203,8 +203,17 @@ void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<M
 
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
                       const cv::Size& frame_size, const cv::Mat& grey, FeatureKind kind) {
+  assess_occlusion(instances, models, frame_size, grey, cv::Mat(), kind);
+}
+
+void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
+                      const cv::Size& frame_size, const cv::Mat& grey, const cv::Mat& colour,
+                      FeatureKind kind) {
   if (!grey.empty() && (grey.type() != CV_8UC1 || grey.size() != frame_size))
     throw Error("assess_occlusion: the frame must be an 8-bit grey picture of the frame size");
+  if (!colour.empty() && (grey.empty() || colour.type() != CV_8UC3 || colour.size() != frame_size))
+    throw Error("assess_occlusion: the colour frame must be 8-bit BGR of the frame size, beside "
+                "the grey one");
   const size_t n = instances.size();
   // above[i]: the instances lying on instance i; hidden[i]: the area they hide, in pixels.
   std::vector<std::vector<size_t>> above(n);
@@ -235,8 +244,8 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
   // Each instance on its own (the instances in parallel): it reads only the others' outlines.
   cv::parallel_for_(cv::Range(0, static_cast<int>(n)), [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k)
-      assess_one(instances, static_cast<size_t>(k), models, frame, grey, above[k], hidden[k],
-                 area[k]);
+      assess_one(instances, static_cast<size_t>(k), models, frame, grey, colour, above[k],
+                 hidden[k], area[k]);
   });
 
   std::vector<size_t> order(n);

@@ -57,4 +57,13 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
                       const cv::Size& frame_size, const cv::Mat& grey = cv::Mat(),
                       FeatureKind kind = FeatureKind::Sift);
 
+/// The same, with the frame also in colour (`colour`, 8-bit BGR of the frame size; empty: as
+/// above): where a model's picture has colour (Model::colour), a patch of the instance whose
+/// colour is another than its print's is something else lying on it, also where the print is
+/// plain. Throws Error when `colour` is given without `grey` or is not 8-bit BGR of the frame
+/// size.
+void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
+                      const cv::Size& frame_size, const cv::Mat& grey, const cv::Mat& colour,
+                      FeatureKind kind = FeatureKind::Sift);
+
 } // namespace pickdetect
