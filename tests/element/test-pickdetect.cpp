@@ -907,6 +907,20 @@ static GstBuffer* colour_buffer(const cv::Mat& bgr, const char* format) {
   return buffer;
 }
 
+/// The output of one element with `models` for `scene` pushed in `format`: packed RGB formats
+/// made from the BGR `scene`, GRAY8 from `grey`.
+static GstBuffer* push_in_format(const std::string& models, const char* format,
+                                 const cv::Mat& scene, const cv::Mat& grey) {
+  GstHarness* h = pickdetect_harness();
+  g_object_set(h->element, "model", models.c_str(), nullptr);
+  gst_harness_set_src_caps_str(h, caps_string(format, scene.size()).c_str());
+  const bool colour = std::strcmp(format, "GRAY8") != 0;
+  GstBuffer* out = gst_harness_push_and_pull(h, colour ? colour_buffer(scene, format)
+                                                       : scene_buffer(grey, format));
+  gst_harness_teardown(h);
+  return out;
+}
+
 // Two editions of one design that differ in colour (red and blue swapped): in colour formats
 // each instance is named by the frame's colour; in GRAY8 the result is the core's without
 // colour (which edition a grey frame names is a matter of chance, see
@@ -938,12 +952,8 @@ GST_START_TEST(test_colour_names_look_alike_editions) {
         in_grey[k] = in.model_name;
 
   for (const char* format : {"BGR", "RGB", "xRGB", "BGRA", "GRAY8"}) {
-    GstHarness* h = pickdetect_harness();
-    g_object_set(h->element, "model", models.c_str(), nullptr);
-    gst_harness_set_src_caps_str(h, caps_string(format, size).c_str());
     const bool colour = std::strcmp(format, "GRAY8") != 0;
-    GstBuffer* out = gst_harness_push_and_pull(h, colour ? colour_buffer(scene, format)
-                                                         : scene_buffer(grey, format));
+    GstBuffer* out = push_in_format(models, format, scene, grey);
     const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
     fail_unless(meta != nullptr && meta->n_instances == 2, "%s: %u instances", format,
                 meta ? meta->n_instances : 0u);
@@ -955,7 +965,46 @@ GST_START_TEST(test_colour_names_look_alike_editions) {
                   in->model_name, in->center_x, in->center_y, expected.c_str());
     }
     gst_buffer_unref(out);
-    gst_harness_teardown(h);
+  }
+}
+GST_END_TEST;
+
+// Pick safety from the frame's colour: a plain card of another colour, as light in grey as the
+// plain panel of the print it lies on, makes the instance covered in every packed RGB format;
+// in GRAY8 nothing tells it from the panel.
+GST_START_TEST(test_colour_cover_in_colour_formats) {
+  TempDir dir;
+  const cv::Mat fruits = cv::imread(std::string(TEST_DATA_DIR) + "/fruits.jpg", cv::IMREAD_COLOR);
+  fail_unless(!fruits.empty());
+  // The picture: a crop of fruits.jpg beside a plain orange panel.
+  cv::Mat picture(220, 460, CV_8UC3, cv::Scalar(40, 130, 230));
+  fruits(cv::Rect(150, 120, 300, 220)).copyTo(picture(cv::Rect(0, 0, 300, 220)));
+  fail_unless(cv::imwrite(dir.path + "/panel.png", picture));
+  const cv::Size size(800, 480);
+  cv::Mat grey = pickdetect::test_scene::smooth_noise_background(size, 3), scene;
+  cv::cvtColor(grey, scene, cv::COLOR_GRAY2BGR);
+  const Pose at = {400.0, 240.0, 20.0, 0.9};
+  pickdetect::test_scene::paste(scene, picture, {scene_pose(at)});
+  // The card over the panel's middle (picture point (380, 110)), teal, as light as the orange.
+  const cv::Point2f card = pickdetect::test_scene::apply(
+      pickdetect::test_scene::model_to_scene(picture.size(), scene_pose(at)), {380.f, 110.f});
+  const double orange_grey = 0.114 * 40 + 0.587 * 130 + 0.299 * 230;
+  const double teal_green = (orange_grey - 0.114 * 200 - 0.299 * 40) / 0.587;
+  cv::ellipse(scene, cv::Point(cvRound(card.x), cvRound(card.y)), cv::Size(34, 26), at.angle, 0,
+              360, cv::Scalar(200, teal_green, 40), cv::FILLED, cv::LINE_AA);
+  cv::cvtColor(scene, grey, cv::COLOR_BGR2GRAY);
+
+  for (const char* format : {"BGR", "RGB", "xRGB", "BGRA", "GRAY8"}) {
+    const bool colour = std::strcmp(format, "GRAY8") != 0;
+    GstBuffer* out = push_in_format(dir.path + "/panel.png", format, scene, grey);
+    const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
+    fail_unless(meta != nullptr && meta->n_instances == 1, "%s: %u instances", format,
+                meta ? meta->n_instances : 0u);
+    const GstPickDetectInstance* in = nearest(meta, at.x, at.y);
+    fail_unless(std::hypot(in->center_x - at.x, in->center_y - at.y) < 4.0);
+    fail_unless(in->covered == (colour ? TRUE : FALSE), "%s: covered %d", format, in->covered);
+    fail_unless(in->pickable == (colour ? FALSE : TRUE), "%s: pickable %d", format, in->pickable);
+    gst_buffer_unref(out);
   }
 }
 GST_END_TEST;
@@ -1133,6 +1182,7 @@ static Suite* pickdetect_suite(void) {
   tcase_add_test(tc, test_model_set_file);
   tcase_add_test(tc, test_views_of_one_product);
   tcase_add_test(tc, test_colour_names_look_alike_editions);
+  tcase_add_test(tc, test_colour_cover_in_colour_formats);
   tcase_add_test(tc, test_pickable_and_covered);
   return s;
 }
