@@ -96,8 +96,7 @@ std::vector<Instance> find_instances(const Model& model, int m, const Features& 
     inst.model_name = ms.model.name;
     inst.view = ms.model.view;
     inst.score = score_for(inst.matches);
-    inst.grasp = inst.points[ms.model.grasp_point];
-    inst.grasp_angle = inst.angle;
+    detail::set_grasp(inst, ms.model);
     out.push_back(std::move(inst));
   }
   return out;

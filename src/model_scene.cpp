@@ -38,6 +38,11 @@ void place(Instance& inst, const Model& model, const cv::Matx33d& h) {
   inst.scale = local.scale;
 }
 
+void set_grasp(Instance& inst, const Model& model) {
+  inst.grasp = inst.points[static_cast<size_t>(model.grasp_point)];
+  inst.grasp_angle = inst.angle;
+}
+
 std::vector<cv::Point2f> scene_points(const ModelScene& ms, const std::vector<int>& idx) {
   std::vector<cv::Point2f> out;
   out.reserve(idx.size());

@@ -41,6 +41,10 @@ double model_side(const Model& model);
 void place(Instance& inst, const Model& model, const Similarity& pose);
 void place(Instance& inst, const Model& model, const cv::Matx33d& h);
 
+/// Sets an instance's grasp point (its principal point Model::grasp_point) and gripper angle (its
+/// angle) from its placed geometry.
+void set_grasp(Instance& inst, const Model& model);
+
 /// Scene positions of the given matches' scene keypoints.
 std::vector<cv::Point2f> scene_points(const ModelScene& ms, const std::vector<int>& idx);
 /// Model positions of the given matches' model keypoints.

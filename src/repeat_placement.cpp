@@ -35,8 +35,7 @@ Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& sh
   Instance out = inst;
   const cv::Matx33d by(1, 0, shift.x, 0, 1, shift.y, 0, 0, 1);
   place(out, model, inst.homography * by);
-  out.grasp = out.points[model.grasp_point];
-  out.grasp_angle = out.angle;
+  set_grasp(out, model);
   return out;
 }
 
