@@ -310,6 +310,53 @@ GstFlowReturn detect_and_draw(GstElement* element, GstVideoFrame& frame, const F
   return GST_FLOW_OK;
 }
 
+/// Component `c` of a mapped frame as an 8-bit picture of its own size: a view of its plane, or
+/// a copy when its samples are interleaved with another component's (NV12, NV21).
+cv::Mat component(const GstVideoFrame& frame, int c) {
+  const int width = GST_VIDEO_FRAME_COMP_WIDTH(&frame, c);
+  const int height = GST_VIDEO_FRAME_COMP_HEIGHT(&frame, c);
+  const int stride = GST_VIDEO_FRAME_COMP_STRIDE(&frame, c);
+  const int step = GST_VIDEO_FRAME_COMP_PSTRIDE(&frame, c);
+  guint8* data = static_cast<guint8*>(GST_VIDEO_FRAME_COMP_DATA(&frame, c));
+  if (step == 1)
+    return cv::Mat(height, width, CV_8UC1, data, static_cast<size_t>(stride));
+  cv::Mat out(height, width, CV_8UC1);
+  for (int y = 0; y < height; y++) {
+    const guint8* row = data + static_cast<ptrdiff_t>(y) * stride;
+    guint8* to = out.ptr<guint8>(y);
+    for (int x = 0; x < width; x++)
+      to[x] = row[x * step];
+  }
+  return out;
+}
+
+/// Y, U, V to B, G, R for the caps' colorimetry: its matrix (BT.601 when it names none) and its
+/// range (the offsets and scales of 8-bit video or full range).
+cv::Matx34f yuv_to_bgr(const GstVideoInfo& info) {
+  gdouble kr = 0.299, kb = 0.114;
+  if (!gst_video_color_matrix_get_Kr_Kb(info.colorimetry.matrix, &kr, &kb)) {
+    kr = 0.299;
+    kb = 0.114;
+  }
+  gint offset[GST_VIDEO_MAX_COMPONENTS], scale[GST_VIDEO_MAX_COMPONENTS];
+  gst_video_color_range_offsets(info.colorimetry.range, info.finfo, offset, scale);
+  const double sy = 255.0 / scale[0], sc = 255.0 / scale[1];
+  const double kg = 1.0 - kr - kb;
+  // Per output channel: weights of Y, U (Cb), V (Cr); offsets folded into the last column.
+  const double b_u = 2.0 * (1.0 - kb) * sc, r_v = 2.0 * (1.0 - kr) * sc;
+  const double g_u = -2.0 * kb * (1.0 - kb) / kg * sc, g_v = -2.0 * kr * (1.0 - kr) / kg * sc;
+  const double oy = offset[0], oc = offset[1];
+  auto row = [&](double wu, double wv) { return cv::Vec4d(sy, wu, wv, -sy * oy - (wu + wv) * oc); };
+  const cv::Vec4d b = row(b_u, 0.0), g = row(g_u, g_v), r = row(0.0, r_v);
+  cv::Matx34f m;
+  for (int k = 0; k < 4; k++) {
+    m(0, k) = static_cast<float>(b[k]);
+    m(1, k) = static_cast<float>(g[k]);
+    m(2, k) = static_cast<float>(r[k]);
+  }
+  return m;
+}
+
 } // namespace
 
 bool FrameFormat::configure(const GstVideoInfo& info, std::string& error) {
@@ -319,6 +366,8 @@ bool FrameFormat::configure(const GstVideoInfo& info, std::string& error) {
   weights_.release();
   if (GST_VIDEO_FORMAT_INFO_IS_GRAY(finfo) || GST_VIDEO_FORMAT_INFO_IS_YUV(finfo)) {
     grey_source_ = GreySource::Plane;
+    if (GST_VIDEO_FORMAT_INFO_IS_YUV(finfo))
+      yuv_to_bgr_ = yuv_to_bgr(info);
   } else {
     switch (GST_VIDEO_INFO_FORMAT(&info)) {
     case GST_VIDEO_FORMAT_RGB:
@@ -386,10 +435,24 @@ cv::Mat FrameFormat::grey(const GstVideoFrame& frame, cv::Mat& scratch) const {
 }
 
 cv::Mat FrameFormat::colour(const GstVideoFrame& frame, cv::Mat& scratch) const {
-  if (grey_source_ == GreySource::Plane)
-    return cv::Mat();
   const int width = GST_VIDEO_FRAME_WIDTH(&frame);
   const int height = GST_VIDEO_FRAME_HEIGHT(&frame);
+  if (grey_source_ == GreySource::Plane) {
+    if (!GST_VIDEO_FORMAT_INFO_IS_YUV(info_.finfo))
+      return cv::Mat();
+    // Y as it is, U and V scaled up to it, then the colour matrix.
+    std::vector<cv::Mat> yuv(3);
+    for (int c = 0; c < 3; c++) {
+      cv::Mat plane = component(frame, c);
+      if (plane.size() != cv::Size(width, height))
+        cv::resize(plane, plane, cv::Size(width, height), 0, 0, cv::INTER_LINEAR);
+      yuv[static_cast<size_t>(c)] = plane;
+    }
+    cv::Mat merged;
+    cv::merge(yuv, merged);
+    cv::transform(merged, scratch, yuv_to_bgr_);
+    return scratch;
+  }
   const size_t stride = static_cast<size_t>(GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0));
   void* data = GST_VIDEO_FRAME_PLANE_DATA(&frame, 0);
   const int channels = GST_VIDEO_FRAME_COMP_PSTRIDE(&frame, 0);

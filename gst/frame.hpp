@@ -74,9 +74,10 @@ public:
   /// A grey view of the mapped frame: the luma plane itself, or a conversion into `scratch`.
   cv::Mat grey(const GstVideoFrame& frame, cv::Mat& scratch) const;
 
-  /// The mapped frame in colour, BGR: a view of a BGR frame itself, or the channels of another
-  /// packed RGB format reordered into `scratch`. Empty for GRAY8 and YUV formats (their grey
-  /// is read in place; the colour of look-alikes is then not used).
+  /// The mapped frame in colour, BGR: a view of a BGR frame itself, the channels of another
+  /// packed RGB format reordered into `scratch`, or a YUV frame's planes converted into
+  /// `scratch` (its chroma scaled up to the frame's size, the caps' colour matrix and range).
+  /// Empty for GRAY8.
   cv::Mat colour(const GstVideoFrame& frame, cv::Mat& scratch) const;
 
   const Overlay& overlay() const { return overlay_; }
@@ -92,6 +93,8 @@ private:
   GreySource grey_source_ = GreySource::Plane;
   int cvt_code_ = -1;
   cv::Mat weights_; ///< 1 x channels, CV_32F, for GreySource::Weighted.
+  /// YUV formats: Y, U, V (8-bit, as the caps' colorimetry codes them) to B, G, R.
+  cv::Matx34f yuv_to_bgr_;
   Overlay overlay_;
 };
 
