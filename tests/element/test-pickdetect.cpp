@@ -71,9 +71,10 @@ cv::Mat make_scene(cv::Size size, std::vector<Truth>* truth, bool with_boxes = t
   return scene;
 }
 
-/// The grey scene in `format` (see pickdetect::tools::video_buffer), GStreamer's strides.
-GstBuffer* scene_buffer(const cv::Mat& grey, const char* format) {
-  GstBuffer* buffer = pickdetect::tools::video_buffer(grey, format);
+/// The scene in `format` (a grey picture in any format, a BGR one in BGR or converted to YUV; see
+/// pickdetect::tools::video_buffer), GStreamer's strides.
+GstBuffer* scene_buffer(const cv::Mat& picture, const char* format) {
+  GstBuffer* buffer = pickdetect::tools::video_buffer(picture, format);
   fail_unless(buffer != nullptr, "no %s buffer", format);
   return buffer;
 }
@@ -908,22 +909,25 @@ static GstBuffer* colour_buffer(const cv::Mat& bgr, const char* format) {
 }
 
 /// The output of one element with `models` for `scene` pushed in `format`: packed RGB formats
-/// made from the BGR `scene`, GRAY8 from `grey`.
+/// made from the BGR `scene`, YUV formats converted from it by GStreamer's video converter,
+/// GRAY8 from `grey`.
 static GstBuffer* push_in_format(const std::string& models, const char* format,
                                  const cv::Mat& scene, const cv::Mat& grey) {
   GstHarness* h = pickdetect_harness();
   g_object_set(h->element, "model", models.c_str(), nullptr);
   gst_harness_set_src_caps_str(h, caps_string(format, scene.size()).c_str());
-  const bool colour = std::strcmp(format, "GRAY8") != 0;
-  GstBuffer* out = gst_harness_push_and_pull(h, colour ? colour_buffer(scene, format)
-                                                       : scene_buffer(grey, format));
+  const GstVideoFormatInfo* info = gst_video_format_get_info(gst_video_format_from_string(format));
+  GstBuffer* in = GST_VIDEO_FORMAT_INFO_IS_GRAY(info)  ? scene_buffer(grey, format)
+                  : GST_VIDEO_FORMAT_INFO_IS_YUV(info) ? scene_buffer(scene, format)
+                                                       : colour_buffer(scene, format);
+  GstBuffer* out = gst_harness_push_and_pull(h, in);
   gst_harness_teardown(h);
   return out;
 }
 
 // Two editions of one design that differ in colour (red and blue swapped): in colour formats
-// each instance is named by the frame's colour; in GRAY8 the result is the core's without
-// colour (which edition a grey frame names is a matter of chance, see
+// (packed RGB and YUV) each instance is named by the frame's colour; in GRAY8 the result is the
+// core's without colour (which edition a grey frame names is a matter of chance, see
 // tests/core/test_colour.cpp).
 GST_START_TEST(test_colour_names_look_alike_editions) {
   TempDir dir;
@@ -951,7 +955,7 @@ GST_START_TEST(test_colour_names_look_alike_editions) {
       if (std::hypot(in.center.x - at[k].x, in.center.y - at[k].y) < 4.0)
         in_grey[k] = in.model_name;
 
-  for (const char* format : {"BGR", "RGB", "xRGB", "BGRA", "GRAY8"}) {
+  for (const char* format : {"BGR", "RGB", "xRGB", "BGRA", "I420", "NV12", "NV21", "GRAY8"}) {
     const bool colour = std::strcmp(format, "GRAY8") != 0;
     GstBuffer* out = push_in_format(models, format, scene, grey);
     const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
@@ -970,8 +974,8 @@ GST_START_TEST(test_colour_names_look_alike_editions) {
 GST_END_TEST;
 
 // Pick safety from the frame's colour: a plain card of another colour, as light in grey as the
-// plain panel of the print it lies on, makes the instance covered in every packed RGB format;
-// in GRAY8 nothing tells it from the panel.
+// plain panel of the print it lies on, makes the instance covered in packed RGB and YUV
+// formats; in GRAY8 nothing tells it from the panel.
 GST_START_TEST(test_colour_cover_in_colour_formats) {
   TempDir dir;
   const cv::Mat fruits = cv::imread(std::string(TEST_DATA_DIR) + "/fruits.jpg", cv::IMREAD_COLOR);
@@ -994,7 +998,7 @@ GST_START_TEST(test_colour_cover_in_colour_formats) {
               360, cv::Scalar(200, teal_green, 40), cv::FILLED, cv::LINE_AA);
   cv::cvtColor(scene, grey, cv::COLOR_BGR2GRAY);
 
-  for (const char* format : {"BGR", "RGB", "xRGB", "BGRA", "GRAY8"}) {
+  for (const char* format : {"BGR", "RGB", "xRGB", "BGRA", "I420", "NV12", "NV21", "GRAY8"}) {
     const bool colour = std::strcmp(format, "GRAY8") != 0;
     GstBuffer* out = push_in_format(dir.path + "/panel.png", format, scene, grey);
     const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);

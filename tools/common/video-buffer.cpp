@@ -64,6 +64,40 @@ GstBuffer* make_frame(const char* format, cv::Size size, Layout layout, GstVideo
 
 } // namespace
 
+GstBuffer* converted_video_buffer(const cv::Mat& bgr, const char* format, Layout layout,
+                                  GstVideoInfo* info_out) {
+  GstVideoInfo in_info, out_info;
+  GstBuffer* in = video_buffer(bgr, "BGR", Layout::Default, &in_info);
+  // Filled by the converter below: the rows are left as they are.
+  GstBuffer* out =
+      in ? make_frame(format, bgr.size(), layout, &out_info, [](guint, int, guint8*, int) {})
+         : nullptr;
+  GstVideoConverter* converter =
+      out ? gst_video_converter_new(&in_info, &out_info, nullptr) : nullptr;
+  GstVideoFrame from, to;
+  bool done = false;
+  if (converter && gst_video_frame_map(&from, &in_info, in, GST_MAP_READ)) {
+    if (gst_video_frame_map(&to, &out_info, out, GST_MAP_WRITE)) {
+      gst_video_converter_frame(converter, &from, &to);
+      gst_video_frame_unmap(&to);
+      done = true;
+    }
+    gst_video_frame_unmap(&from);
+  }
+  if (converter)
+    gst_video_converter_free(converter);
+  if (in)
+    gst_buffer_unref(in);
+  if (!done) {
+    if (out)
+      gst_buffer_unref(out);
+    return nullptr;
+  }
+  if (info_out)
+    *info_out = out_info;
+  return out;
+}
+
 std::string caps_string(const char* format, cv::Size size, int fps) {
   return "video/x-raw,format=" + std::string(format) + ",width=" + std::to_string(size.width) +
          ",height=" + std::to_string(size.height) + ",framerate=" + std::to_string(fps) + "/1";
@@ -88,9 +122,10 @@ GstBuffer* video_buffer(const cv::Mat& picture, const char* format, Layout layou
                         GstVideoInfo* info_out) {
   const GstVideoFormat f = gst_video_format_from_string(format);
   const GstVideoFormatInfo* finfo = gst_video_format_get_info(f);
-  if (!finfo || picture.depth() != CV_8U ||
-      (picture.channels() != 1 && !(picture.channels() == 3 && f == GST_VIDEO_FORMAT_BGR)))
+  if (!finfo || picture.depth() != CV_8U || (picture.channels() != 1 && picture.channels() != 3))
     return nullptr;
+  if (picture.channels() == 3 && f != GST_VIDEO_FORMAT_BGR)
+    return converted_video_buffer(picture, format, layout, info_out);
   const bool rgb = GST_VIDEO_FORMAT_INFO_IS_RGB(finfo);
   const int pstride = GST_VIDEO_FORMAT_INFO_PSTRIDE(finfo, 0);
   const int alpha =

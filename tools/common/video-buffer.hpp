@@ -32,11 +32,19 @@ enum class Layout {
 GstBuffer* allocate_video_buffer(GstVideoInfo& info, const GstVideoAlignment* align = nullptr);
 
 /// A frame of `format` showing `picture`: a grey picture (CV_8UC1) in any format, as R = G = B =
-/// grey with opaque alpha or as Y = grey with neutral chroma; a BGR picture (CV_8UC3) in BGR.
-/// PTS 0 and a duration of 1/30 s. `info_out` receives the frame's layout. Null when the format
-/// is unknown or does not take the picture.
+/// grey with opaque alpha or as Y = grey with neutral chroma; a BGR picture (CV_8UC3) in BGR, or
+/// in any other format through converted_video_buffer. PTS 0 and a duration of 1/30 s.
+/// `info_out` receives the frame's layout. Null when the format is unknown or does not take
+/// the picture.
 GstBuffer* video_buffer(const cv::Mat& picture, const char* format, Layout layout = Layout::Default,
                         GstVideoInfo* info_out = nullptr);
+
+/// A frame of `format` showing the BGR picture `bgr` (CV_8UC3), converted by GStreamer's video
+/// converter (the default colorimetry of the format and size, as caps without one get). PTS 0
+/// and a duration of 1/30 s. Null when the format is unknown or the conversion fails.
+GstBuffer* converted_video_buffer(const cv::Mat& bgr, const char* format,
+                                  Layout layout = Layout::Default,
+                                  GstVideoInfo* info_out = nullptr);
 
 /// A frame of `format` and `size` whose every plane holds random bytes (seeded by the size).
 GstBuffer* noise_video_buffer(const char* format, cv::Size size, Layout layout = Layout::Default,
