@@ -884,42 +884,15 @@ GST_START_TEST(test_views_of_one_product) {
 }
 GST_END_TEST;
 
-/// A frame of a packed RGB `format` (BGR, RGB, xRGB, BGRA...) showing the BGR picture.
-static GstBuffer* colour_buffer(const cv::Mat& bgr, const char* format) {
-  GstVideoInfo info;
-  gst_video_info_set_format(&info, gst_video_format_from_string(format), bgr.cols, bgr.rows);
-  GstBuffer* buffer = pickdetect::tools::allocate_video_buffer(info);
-  GstVideoFrame frame;
-  fail_unless(gst_video_frame_map(&frame, &info, buffer, GST_MAP_WRITE));
-  const GstVideoFormatInfo* f = info.finfo;
-  const int step = GST_VIDEO_FORMAT_INFO_PSTRIDE(f, 0);
-  for (int y = 0; y < bgr.rows; y++) {
-    guint8* row = static_cast<guint8*>(GST_VIDEO_FRAME_PLANE_DATA(&frame, 0)) +
-                  y * GST_VIDEO_FRAME_PLANE_STRIDE(&frame, 0);
-    for (int x = 0; x < bgr.cols; x++) {
-      std::memset(row + x * step, 255, step); // Padding and alpha: opaque.
-      const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
-      for (int c = 0; c < 3; c++) // Components 0, 1, 2: R, G, B.
-        row[x * step + GST_VIDEO_FORMAT_INFO_POFFSET(f, c)] = p[2 - c];
-    }
-  }
-  gst_video_frame_unmap(&frame);
-  GST_BUFFER_PTS(buffer) = 0;
-  return buffer;
-}
-
-/// The output of one element with `models` for `scene` pushed in `format`: packed RGB formats
-/// made from the BGR `scene`, YUV formats converted from it by GStreamer's video converter,
-/// GRAY8 from `grey`.
+/// The output of one element with `models` for `scene` pushed in `format`: colour formats made
+/// from the BGR `scene` (by GStreamer's video converter where not BGR), GRAY8 from `grey`.
 static GstBuffer* push_in_format(const std::string& models, const char* format,
                                  const cv::Mat& scene, const cv::Mat& grey) {
   GstHarness* h = pickdetect_harness();
   g_object_set(h->element, "model", models.c_str(), nullptr);
   gst_harness_set_src_caps_str(h, caps_string(format, scene.size()).c_str());
   const GstVideoFormatInfo* info = gst_video_format_get_info(gst_video_format_from_string(format));
-  GstBuffer* in = GST_VIDEO_FORMAT_INFO_IS_GRAY(info)  ? scene_buffer(grey, format)
-                  : GST_VIDEO_FORMAT_INFO_IS_YUV(info) ? scene_buffer(scene, format)
-                                                       : colour_buffer(scene, format);
+  GstBuffer* in = scene_buffer(GST_VIDEO_FORMAT_INFO_IS_GRAY(info) ? grey : scene, format);
   GstBuffer* out = gst_harness_push_and_pull(h, in);
   gst_harness_teardown(h);
   return out;
