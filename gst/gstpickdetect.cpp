@@ -72,6 +72,7 @@ enum {
   PROP_BANDWIDTH,
   PROP_MAX_INSTANCES,
   PROP_ALLOW_SCALE,
+  PROP_PICK_WHOLE_IN_VIEW,
   PROP_FEATURES,
   PROP_DETECTION_SCALE,
   PROP_CONTRAST_THRESHOLD,
@@ -93,6 +94,7 @@ constexpr int DEFAULT_MIN_MATCHES = 4;
 constexpr double DEFAULT_BANDWIDTH = 0.0;
 constexpr int DEFAULT_MAX_INSTANCES = 0;
 constexpr gboolean DEFAULT_ALLOW_SCALE = TRUE;
+constexpr gboolean DEFAULT_PICK_WHOLE_IN_VIEW = FALSE;
 constexpr GstPickDetectFeatures DEFAULT_FEATURES = GST_PICK_DETECT_FEATURES_SIFT;
 constexpr double DEFAULT_DETECTION_SCALE = 1.0;
 constexpr double DEFAULT_CONTRAST_THRESHOLD = 0.0;
@@ -113,6 +115,8 @@ static_assert(pickdetect::Settings{}.min_matches == DEFAULT_MIN_MATCHES);
 static_assert(pickdetect::Settings{}.bandwidth == DEFAULT_BANDWIDTH);
 static_assert(pickdetect::Settings{}.max_instances == DEFAULT_MAX_INSTANCES);
 static_assert(pickdetect::Settings{}.allow_scale == static_cast<bool>(DEFAULT_ALLOW_SCALE));
+static_assert(pickdetect::Settings{}.pick_whole_in_view ==
+              static_cast<bool>(DEFAULT_PICK_WHOLE_IN_VIEW));
 static_assert(pickdetect::Settings{}.features == pickdetect::FeatureKind::Sift &&
               DEFAULT_FEATURES == GST_PICK_DETECT_FEATURES_SIFT);
 static_assert(pickdetect::Settings{}.detection_scale == DEFAULT_DETECTION_SCALE);
@@ -362,6 +366,9 @@ static void gst_pick_detect_set_property(GObject* object, guint prop_id, const G
   case PROP_ALLOW_SCALE:
     config.settings.allow_scale = g_value_get_boolean(value);
     break;
+  case PROP_PICK_WHOLE_IN_VIEW:
+    config.settings.pick_whole_in_view = g_value_get_boolean(value);
+    break;
   case PROP_FEATURES:
     config.settings.features = g_value_get_enum(value) == GST_PICK_DETECT_FEATURES_ORB
                                    ? pickdetect::FeatureKind::Orb
@@ -444,6 +451,9 @@ static void gst_pick_detect_get_property(GObject* object, guint prop_id, GValue*
     break;
   case PROP_ALLOW_SCALE:
     g_value_set_boolean(value, config.settings.allow_scale);
+    break;
+  case PROP_PICK_WHOLE_IN_VIEW:
+    g_value_set_boolean(value, config.settings.pick_whole_in_view);
     break;
   case PROP_FEATURES:
     g_value_set_enum(value, config.settings.features == pickdetect::FeatureKind::Orb
@@ -930,6 +940,13 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
                            "Instances may be larger or smaller than the model (else the scale is "
                            "fixed at 1)",
                            DEFAULT_ALLOW_SCALE, flags));
+  g_object_class_install_property(
+      gobject_class, PROP_PICK_WHOLE_IN_VIEW,
+      g_param_spec_boolean("pick-whole-in-view", "Pick whole in view",
+                           "Flag an instance pickable only when the whole object lies in the "
+                           "frame: what lies on a part the camera does not see is not known "
+                           "(else half of it in view is enough)",
+                           DEFAULT_PICK_WHOLE_IN_VIEW, flags));
   g_object_class_install_property(
       gobject_class, PROP_FEATURES,
       g_param_spec_enum("features", "Features",

@@ -270,7 +270,8 @@ Detection Detector::detect_matched(const Features& scene, const std::vector<Matc
                    });
   if (s.max_instances > 0 && static_cast<int>(result.instances.size()) > s.max_instances)
     result.instances.resize(s.max_instances);
-  assess_occlusion(result.instances, models_, frame_size, grey, colour, s.features);
+  assess_occlusion(result.instances, models_, frame_size, grey, colour, s.features,
+                   s.pick_whole_in_view);
   result.timings.clustering_ms = ms_since(t);
   return result;
 }

@@ -88,11 +88,12 @@ double correlation(const Instance& inst, const Model& model, const cv::Mat& grey
 }
 
 /// Whether instance `i` is covered and pickable, and how much of it is seen: `above` the
-/// instances lying on it, `hidden` the area they hide, `area` its own (pixels). Writes only
+/// instances lying on it, `hidden` the area they hide, `area` its own (pixels); with
+/// `whole_in_view`, what lies outside the frame counts as hidden for the pick flag. Writes only
 /// instance `i`, reads the others' outlines.
 void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Model>& models,
                 const cv::Rect& frame, const cv::Mat& grey, const cv::Mat& colour,
-                const std::vector<size_t>& above, double hidden, double area) {
+                const std::vector<size_t>& above, double hidden, double area, bool whole_in_view) {
   Instance& inst = instances[i];
   inst.covered = area <= 0.0 || hidden > kCoverTolerance * area;
   if (!inst.covered && !grey.empty()) {
@@ -103,6 +104,7 @@ void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Mo
                    detail::kMinForeignCells;
   }
   inst.visibility = 0.0;
+  double in_frame = 0.0; // Share of the outline inside the frame.
   const cv::Rect box = cv::boundingRect(inst.outline) & frame;
   if (area > 0.0 && box.area() > 0) {
     cv::Mat seen = cv::Mat::zeros(box.size(), CV_8UC1);
@@ -113,6 +115,7 @@ void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Mo
       cv::fillPoly(seen, std::vector<std::vector<cv::Point>>{polygon}, cv::Scalar(value));
     };
     fill(inst.outline, 255);
+    in_frame = std::min(1.0, cv::countNonZero(seen) / area);
     for (size_t j : above)
       fill(instances[j].outline, 0);
     inst.visibility = std::min(1.0, cv::countNonZero(seen) / area);
@@ -120,7 +123,8 @@ void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Mo
   const bool grasp_in_frame = inst.grasp.x >= kGraspMarginPx && inst.grasp.y >= kGraspMarginPx &&
                               inst.grasp.x < frame.width - kGraspMarginPx &&
                               inst.grasp.y < frame.height - kGraspMarginPx;
-  inst.pickable = !inst.covered && grasp_in_frame && inst.visibility >= kMinPickableVisibility;
+  inst.pickable = !inst.covered && grasp_in_frame && inst.visibility >= kMinPickableVisibility &&
+                  (!whole_in_view || 1.0 - in_frame <= kCoverTolerance);
   inst.pick_order = 0;
 }
 
@@ -208,7 +212,7 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
 
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
                       const cv::Size& frame_size, const cv::Mat& grey, const cv::Mat& colour,
-                      FeatureKind kind) {
+                      FeatureKind kind, bool whole_in_view) {
   if (!grey.empty() && (grey.type() != CV_8UC1 || grey.size() != frame_size))
     throw Error("assess_occlusion: the frame must be an 8-bit grey picture of the frame size");
   if (!colour.empty() && (grey.empty() || colour.type() != CV_8UC3 || colour.size() != frame_size))
@@ -245,7 +249,7 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
   cv::parallel_for_(cv::Range(0, static_cast<int>(n)), [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k)
       assess_one(instances, static_cast<size_t>(k), models, frame, grey, colour, above[k],
-                 hidden[k], area[k]);
+                 hidden[k], area[k], whole_in_view);
   });
 
   std::vector<size_t> order(n);

@@ -59,6 +59,11 @@ struct Settings {
   /// darker parts, at more cost everywhere.
   double contrast_threshold = 0.0;
   double ransac_reprojection_px = 5.0; ///< RANSAC baselines: inlier distance in scene pixels.
+  /// Pickable only when the whole object is in view (no more than kCoverTolerance, occlusion.hpp,
+  /// of its outline outside the frame): what lies on a part the camera does not see is not known.
+  /// False: half of it in view is enough (kMinPickableVisibility), as for a box cut by the edge
+  /// of a camera that sees the whole work area.
+  bool pick_whole_in_view = false;
 };
 
 /// Whether two settings agree in every field (a field added to Settings is added here too).

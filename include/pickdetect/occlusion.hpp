@@ -18,7 +18,7 @@ constexpr double kOverlapTolerance = 0.005;
 /// under the benchmark's 2 % safety line, because what truly lies on an object also includes
 /// what no outline shows (shadows, undetected objects), measured at up to 1 % more.
 constexpr double kCoverTolerance = 0.01;
-/// An instance is pickable only when at least this share of its outline is seen.
+/// An instance is pickable only when at least this share of its outline is seen...
 constexpr double kMinPickableVisibility = 0.5;
 /// ...and its grasp point lies at least this many pixels inside the frame: one on the frame's
 /// edge, where a fraction of a pixel decides, is not known to be in view.
@@ -60,10 +60,12 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
 /// The same, with the frame also in colour (`colour`, 8-bit BGR of the frame size; empty: as
 /// above): where a model's picture has colour (Model::colour), a patch of the instance whose
 /// colour is another than its print's is something else lying on it, also where the print is
-/// plain. Throws Error when `colour` is given without `grey` or is not 8-bit BGR of the frame
-/// size.
+/// plain. With `whole_in_view`, an instance is also pickable only when no more than
+/// kCoverTolerance of its outline lies outside the frame: what lies on a part the camera does not
+/// see is not known (Settings::pick_whole_in_view). Throws Error when `colour` is given without
+/// `grey` or is not 8-bit BGR of the frame size.
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
                       const cv::Size& frame_size, const cv::Mat& grey, const cv::Mat& colour,
-                      FeatureKind kind = FeatureKind::Sift);
+                      FeatureKind kind = FeatureKind::Sift, bool whole_in_view = false);
 
 } // namespace pickdetect

@@ -111,6 +111,34 @@ TEST(Occlusion, VisibilityCountsWhatLiesOutsideTheFrame) {
   EXPECT_FALSE(found[0].pickable) << "its grasp point (the centre) lies on the frame's edge";
 }
 
+TEST(Occlusion, WithPickWholeInViewABoxPartlyBeyondTheFrameIsNotPickable) {
+  // A fifth of the box (324 px wide) lies beyond the left edge; its grasp point and most of it
+  // are in view. By default it is pickable; with pick_whole_in_view it is not (what lies on the
+  // part the camera does not see is not known), while the same box wholly in view (its left
+  // edge 4 px inside) still is.
+  const cv::Mat picture = box_picture();
+  auto detect = [&](float x, bool whole_in_view) {
+    cv::Mat scene = test_scene::plain_background({700, 600});
+    test_scene::paste(scene, picture, {{{x, 300.f}, 0.0, 1.0}});
+    Settings settings;
+    settings.pick_whole_in_view = whole_in_view;
+    const Detection d = box_detector().detect(scene, settings);
+    EXPECT_EQ(d.instances.size(), 1u);
+    return d.instances.empty() ? Instance() : d.instances[0];
+  };
+  const Instance partly = detect(100.f, false);
+  EXPECT_NEAR(partly.visibility, 0.81, 0.02);
+  EXPECT_FALSE(partly.covered);
+  EXPECT_TRUE(partly.pickable) << "by default four fifths in view are enough";
+  const Instance unsure = detect(100.f, true);
+  EXPECT_FALSE(unsure.covered);
+  EXPECT_FALSE(unsure.pickable) << "a fifth of it lies outside the frame";
+  EXPECT_EQ(unsure.pick_order, 0);
+  const Instance whole = detect(166.f, true);
+  EXPECT_TRUE(whole.pickable) << "wholly in view, visibility " << whole.visibility;
+  EXPECT_EQ(whole.pick_order, 1);
+}
+
 TEST(Occlusion, PickOrderFollowsTheScore) {
   std::vector<Instance> inst(3);
   const std::vector<std::vector<cv::Point2f>> outlines = {

@@ -1058,6 +1058,38 @@ static std::vector<cv::Point2f> along_outline(const GstPickDetectInstance* in,
   return out;
 }
 
+// A box a fifth of which lies beyond the frame's left edge: pickable by default, not with
+// pick-whole-in-view (set as gst-launch-1.0 sets it, from a string), which a box wholly in view
+// keeps.
+GST_START_TEST(test_pick_whole_in_view) {
+  const cv::Size size(640, 480);
+  for (const char* value : {"false", "true"}) {
+    for (double x : {70.0, 200.0}) { // Box 227 px wide: a fifth outside, then wholly inside.
+      cv::Mat scene = make_scene(size, nullptr, false);
+      paste(scene, box_model().image, Pose{x, 240.0, 0.0, 0.7});
+      GstHarness* h = pickdetect_harness();
+      gst_util_set_object_arg(G_OBJECT(h->element), "pick-whole-in-view", value);
+      gboolean whole = FALSE;
+      g_object_get(h->element, "pick-whole-in-view", &whole, nullptr);
+      fail_unless(!whole == (std::strcmp(value, "false") == 0));
+      gst_harness_set_src_caps_str(h, caps_string("GRAY8", size).c_str());
+      GstBuffer* out = gst_harness_push_and_pull(h, scene_buffer(scene, "GRAY8"));
+      const GstPickDetectMeta* meta = gst_buffer_get_pickdetect_meta(out);
+      fail_unless(meta != nullptr);
+      fail_unless_equals_int(meta->n_instances, 1);
+      const GstPickDetectInstance* in = &meta->instances[0];
+      const bool expected = !whole || x > 150.0;
+      fail_unless(!in->covered, "pick-whole-in-view=%s, x %.0f: covered", value, x);
+      fail_unless(!in->pickable == !expected && (in->pick_order == 1) == expected,
+                  "pick-whole-in-view=%s, x %.0f: pickable %d, order %d", value, x, in->pickable,
+                  in->pick_order);
+      gst_buffer_unref(out);
+      gst_harness_teardown(h);
+    }
+  }
+}
+GST_END_TEST;
+
 // One box lying across another: the element reports the core's covered / pickable / pick order
 // as they are, and draws the pickable one in green, the covered one in red, in every format.
 GST_START_TEST(test_pickable_and_covered) {
@@ -1161,6 +1193,7 @@ static Suite* pickdetect_suite(void) {
   tcase_add_test(tc, test_colour_names_look_alike_editions);
   tcase_add_test(tc, test_colour_cover_in_colour_formats);
   tcase_add_test(tc, test_pickable_and_covered);
+  tcase_add_test(tc, test_pick_whole_in_view);
   return s;
 }
 
