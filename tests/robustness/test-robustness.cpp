@@ -512,8 +512,9 @@ static gpointer hammer_properties(gpointer data) {
     g_object_set(st->h->element, "ratio", g_rand_double_range(rand, 0.5, 0.99), "min-matches",
                  g_rand_int_range(rand, 1, 20), "bandwidth", g_rand_double_range(rand, 0.0, 80.0),
                  "max-instances", g_rand_int_range(rand, 0, 4), "method",
-                 g_rand_int_range(rand, 0, 3), "allow-scale", g_rand_boolean(rand), "draw",
-                 g_rand_boolean(rand), "post-messages", g_rand_boolean(rand), nullptr);
+                 g_rand_int_range(rand, 0, 3), "allow-scale", g_rand_boolean(rand),
+                 "pick-whole-in-view", g_rand_boolean(rand), "draw", g_rand_boolean(rand),
+                 "post-messages", g_rand_boolean(rand), nullptr);
     double ratio = 0;
     g_object_get(st->h->element, "ratio", &ratio, nullptr);
     fail_unless(ratio >= 0.5 && ratio <= 0.99);
