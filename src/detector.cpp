@@ -110,7 +110,8 @@ bool operator==(const Settings& a, const Settings& b) {
          a.allow_scale == b.allow_scale && a.refine == b.refine && a.search == b.search &&
          a.features == b.features && a.detection_scale == b.detection_scale &&
          a.contrast_threshold == b.contrast_threshold &&
-         a.ransac_reprojection_px == b.ransac_reprojection_px;
+         a.ransac_reprojection_px == b.ransac_reprojection_px &&
+         a.pick_whole_in_view == b.pick_whole_in_view;
 }
 
 double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings, double print_share) {

@@ -138,7 +138,7 @@ TEST(Detector, TheAutomaticRatioIsLooserForVotingThanForTheBaselines) {
 TEST(Detector, SettingsAreEqualOnlyWhenEveryFieldIs) {
   const Settings base;
   EXPECT_TRUE(base == Settings());
-  std::vector<Settings> changed(12, base);
+  std::vector<Settings> changed(13, base);
   changed[0].method = Method::RansacAll;
   changed[1].ratio = 0.7;
   changed[2].min_matches = 6;
@@ -151,6 +151,7 @@ TEST(Detector, SettingsAreEqualOnlyWhenEveryFieldIs) {
   changed[9].detection_scale = 0.5;
   changed[10].contrast_threshold = 0.02;
   changed[11].ransac_reprojection_px = 3.0;
+  changed[12].pick_whole_in_view = true;
   for (size_t i = 0; i < changed.size(); ++i)
     EXPECT_TRUE(changed[i] != base) << "field " << i;
 }
