@@ -115,7 +115,8 @@ void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Mo
       cv::fillPoly(seen, std::vector<std::vector<cv::Point>>{polygon}, cv::Scalar(value));
     };
     fill(inst.outline, 255);
-    in_frame = std::min(1.0, cv::countNonZero(seen) / area);
+    if (whole_in_view)
+      in_frame = std::min(1.0, cv::countNonZero(seen) / area);
     for (size_t j : above)
       fill(instances[j].outline, 0);
     inst.visibility = std::min(1.0, cv::countNonZero(seen) / area);
