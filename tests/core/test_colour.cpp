@@ -2,6 +2,7 @@
 // Look-alike products that differ only in colour, told apart by the frame's colour. Scenes
 // built from a crop of OpenCV's fruits.jpg and its recoloured editions.
 #include "../../src/colour_decision.hpp"
+#include "../support/colour_print.hpp"
 #include "../support/folder_test.hpp"
 #include "common/scene.hpp"
 
@@ -42,9 +43,8 @@ protected:
   Colour() : FolderTest("pickdetect-colour-") {}
   void SetUp() override {
     FolderTest::SetUp();
-    const cv::Mat fruits = cv::imread(kData + "/fruits.jpg", cv::IMREAD_COLOR);
-    ASSERT_FALSE(fruits.empty());
-    warm_ = fruits(cv::Rect(150, 120, 300, 220)).clone();
+    warm_ = test_scene::fruits_print(kData);
+    ASSERT_FALSE(warm_.empty());
     cv::cvtColor(warm_, cold_, cv::COLOR_BGR2RGB);
     green_ = turn_hue(warm_, 120);
     cv::imwrite(path("warm.png"), warm_);

@@ -3,6 +3,7 @@
 // as light as the print there (the grey comparison sees flat on flat), makes the instance
 // covered when the frame has colour; a highlight and a coloured light do not. Scenes built
 // from a crop of OpenCV's fruits.jpg beside a plain orange panel.
+#include "../support/colour_print.hpp"
 #include "../support/folder_test.hpp"
 #include "common/scene.hpp"
 
@@ -45,10 +46,10 @@ protected:
   ColourCover() : FolderTest("pickdetect-colour-cover-") {}
   void SetUp() override {
     FolderTest::SetUp();
-    const cv::Mat fruits = cv::imread(kData + "/fruits.jpg", cv::IMREAD_COLOR);
+    const cv::Mat fruits = test_scene::fruits_print(kData);
     ASSERT_FALSE(fruits.empty());
     picture_.create(220, 460, CV_8UC3);
-    fruits(cv::Rect(150, 120, 300, 220)).copyTo(picture_(cv::Rect(0, 0, 300, 220)));
+    fruits.copyTo(picture_(cv::Rect(0, 0, fruits.cols, fruits.rows)));
     picture_(kPanel).setTo(kOrange);
     cv::imwrite(path("fruits_panel.png"), picture_);
     models_ = load_models(path("fruits_panel.png"));

@@ -14,6 +14,7 @@
 #include <gst/pickdetect/pickdetect-meta.h>
 #include <gst/video/video.h>
 
+#include "../support/colour_print.hpp"
 #include "../support/harness.hpp"
 #include "common/scene.hpp"
 #include "common/video-buffer.hpp"
@@ -904,9 +905,8 @@ static GstBuffer* push_in_format(const std::string& models, const char* format,
 // tests/core/test_colour.cpp).
 GST_START_TEST(test_colour_names_look_alike_editions) {
   TempDir dir;
-  const cv::Mat fruits = cv::imread(std::string(TEST_DATA_DIR) + "/fruits.jpg", cv::IMREAD_COLOR);
-  fail_unless(!fruits.empty());
-  const cv::Mat warm = fruits(cv::Rect(150, 120, 300, 220)).clone();
+  const cv::Mat warm = pickdetect::test_scene::fruits_print(TEST_DATA_DIR);
+  fail_unless(!warm.empty());
   cv::Mat cold;
   cv::cvtColor(warm, cold, cv::COLOR_BGR2RGB);
   fail_unless(cv::imwrite(dir.path + "/warm.png", warm) &&
@@ -951,11 +951,11 @@ GST_END_TEST;
 // formats; in GRAY8 nothing tells it from the panel.
 GST_START_TEST(test_colour_cover_in_colour_formats) {
   TempDir dir;
-  const cv::Mat fruits = cv::imread(std::string(TEST_DATA_DIR) + "/fruits.jpg", cv::IMREAD_COLOR);
+  const cv::Mat fruits = pickdetect::test_scene::fruits_print(TEST_DATA_DIR);
   fail_unless(!fruits.empty());
-  // The picture: a crop of fruits.jpg beside a plain orange panel.
+  // The picture: the print beside a plain orange panel.
   cv::Mat picture(220, 460, CV_8UC3, cv::Scalar(40, 130, 230));
-  fruits(cv::Rect(150, 120, 300, 220)).copyTo(picture(cv::Rect(0, 0, 300, 220)));
+  fruits.copyTo(picture(cv::Rect(0, 0, fruits.cols, fruits.rows)));
   fail_unless(cv::imwrite(dir.path + "/panel.png", picture));
   const cv::Size size(800, 480);
   cv::Mat grey = pickdetect::test_scene::smooth_noise_background(size, 3), scene;
