@@ -131,17 +131,19 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
       cv::Point(-1, -1), 1, cv::BORDER_CONSTANT, cv::Scalar(0));
   cv::Mat shrunk;
   cv::resize(grey(box), shrunk, size, 0, 0, cv::INTER_AREA);
-  // The colours, when the frame and the picture both have them, at the same size.
-  const bool in_colour = !colour.empty() && colour.type() == CV_8UC3 &&
-                         colour.size() == grey.size() && !model.colour.empty() &&
+  // The frame's colours, when it has them, and the picture's, when both have them, at the same
+  // size.
+  const bool frame_in_colour =
+      !colour.empty() && colour.type() == CV_8UC3 && colour.size() == grey.size();
+  const bool in_colour = frame_in_colour && !model.colour.empty() &&
                          model.colour.type() == CV_8UC3 &&
                          model.colour.size() == model.image.size();
   cv::Mat shrunk_colour, picture_colour;
-  if (in_colour) {
+  if (frame_in_colour)
     cv::resize(colour(box), shrunk_colour, size, 0, 0, cv::INTER_AREA);
+  if (in_colour)
     cv::warpPerspective(model.colour, picture_colour, cv::Mat(to_box), size, cv::INTER_LINEAR,
                         cv::BORDER_REPLICATE);
-  }
   // Clipped frame pixels (glare) show nothing of what lies there.
   mask.setTo(0, shrunk >= kClipped);
   const cv::Mat frame = detail_of(shrunk), carried = detail_of(picture);
@@ -153,7 +155,7 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
     const float* m = carried.ptr<float>(y);
     const uchar* lf = shrunk.ptr<uchar>(y);
     const uchar* lm = picture.ptr<uchar>(y); // model pictures are 8-bit grey
-    const cv::Vec3b* cf = in_colour ? shrunk_colour.ptr<cv::Vec3b>(y) : nullptr;
+    const cv::Vec3b* cf = frame_in_colour ? shrunk_colour.ptr<cv::Vec3b>(y) : nullptr;
     const cv::Vec3b* cm = in_colour ? picture_colour.ptr<cv::Vec3b>(y) : nullptr;
     CellSums* row = &cells[static_cast<size_t>(y / cell) * columns];
     for (int x = 0; x < columns * cell; ++x) {
@@ -161,10 +163,11 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
         continue;
       CellSums& c = row[x / cell];
       // A channel at the top may be clipped: its colour is not the object's.
-      if (in_colour && cf[x][0] < kClipped && cf[x][1] < kClipped && cf[x][2] < kClipped) {
+      if (frame_in_colour && cf[x][0] < kClipped && cf[x][1] < kClipped && cf[x][2] < kClipped) {
         c.nc += 1;
         c.cf += cv::Vec3d(cf[x][0], cf[x][1], cf[x][2]);
-        c.cm += cv::Vec3d(cm[x][0], cm[x][1], cm[x][2]);
+        if (in_colour)
+          c.cm += cv::Vec3d(cm[x][0], cm[x][1], cm[x][2]);
       }
       c.n += 1;
       c.f += f[x];
@@ -195,6 +198,13 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
     l.compared = true;
     l.level_f = s.lf / s.n;
     l.level_m = s.lm / s.n;
+    if (s.nc >= min_fill) {
+      const cv::Vec3d f = s.cf / s.nc;
+      double hue, saturation;
+      hue_saturation(f, hue, saturation);
+      l.clear_colour =
+          saturation >= kClearSaturation && (f[0] + f[1] + f[2]) / 3.0 >= kMinColourLevel;
+    }
     if (l.detail_f < kMinFrameTexture)
       continue;
     l.correlation = (s.fm / s.n - mf * mm) / (l.detail_f * l.detail_m);
@@ -243,18 +253,21 @@ bool shows_print(const CellLook& l) {
   return l.compared && l.detail_f >= kMinFrameTexture && l.correlation >= kMaxForeignCorrelation;
 }
 
+bool may_be_glare(const CellLook& l, double light) {
+  return l.level_f > light * (l.level_m + kGlareLevels) && !l.clear_colour;
+}
+
 bool denies_print(const CellLook& l, const CellComparison& cmp) {
   if (!l.compared)
     return false;
   if (l.detail_f >= kMinFrameTexture)
     return l.correlation < kMaxForeignCorrelation;
-  // Flat where the print, as this frame shows it elsewhere, would have clear detail, and not
-  // brighter than the print there: a plain surface lies on it. Brighter is a highlight washing
-  // the print out (or a white surface: it cannot be told).
+  // Flat where the print, as this frame shows it elsewhere, would have clear detail, and no
+  // highlight: a plain surface lies on it.
   return cmp.print_cells >= kMinForeignCells &&
          cmp.detail_kept * l.detail_m >= kFlatCoverDetail * kMinFrameTexture &&
          l.detail_f <= kFlatCoverShare * cmp.detail_kept * l.detail_m &&
-         l.level_f <= cmp.light * (l.level_m + kGlareLevels);
+         !may_be_glare(l, cmp.light);
 }
 
 int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
@@ -295,8 +308,7 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
     for (int r = 0; r < rows; ++r)
       for (int c = 0; c < columns; ++c) {
         const CellLook& l = looks[static_cast<size_t>(r) * columns + c];
-        if (l.compared && l.detail_f < kMinFrameTexture &&
-            l.level_f <= light * (l.level_m + kGlareLevels))
+        if (l.compared && l.detail_f < kMinFrameTexture && !may_be_glare(l, light))
           unseen.at<uchar>(r, c) = 255;
       }
   cv::Mat labels, stats, centroids;

@@ -25,9 +25,9 @@ constexpr double kMaxForeignCorrelation = 0.3;
 /// A flat frame cell shows a plain surface lying on the print when the print, with as much of
 /// its detail as the frame keeps where the print is seen (the median over the matching cells:
 /// blur, exposure), would show at least kFlatCoverDetail times the flatness threshold there,
-/// the frame shows at most kFlatCoverShare of that, and the cell is no more than kGlareLevels
-/// of the model's grey levels brighter than the print in the frame's light (brighter: a
-/// highlight washing the print out, or a white surface; they cannot be told apart).
+/// the frame shows at most kFlatCoverShare of that, and the cell is no highlight: no more than
+/// kGlareLevels of the model's grey levels brighter than the print in the frame's light, or of
+/// a clear colour (may_be_glare).
 constexpr double kFlatCoverDetail = 2.0;
 constexpr double kFlatCoverShare = 0.25;
 constexpr double kGlareLevels = 30.0;
@@ -79,6 +79,10 @@ struct CellLook {
   /// Enough pixels, and the frame's colour there is another than the print's (see kMaxHueTurn);
   /// only when compare_cells is given the frame's colour.
   bool other_colour = false;
+  /// Compared, and the frame's colour there is clear (saturation at least kClearSaturation, as
+  /// light as kMinColourLevel), whatever the picture's colour; only when compare_cells is given
+  /// the frame's colour.
+  bool clear_colour = false;
 };
 
 /// The instance's print, carried into the frame by its homography, compared with the frame
@@ -109,10 +113,18 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
 /// kMaxForeignCorrelation or more with the picture carried there.
 bool shows_print(const CellLook& look);
 
+/// Whether a compared cell may be a highlight washing the print out: brighter than the print by
+/// more than kGlareLevels of the model's grey levels in the frame's light `light`, and not of a
+/// clear colour. A highlight takes the light's colour, near white, whatever the print's; a
+/// plain surface of clear colour brighter than the print is something lying on it (with a grey
+/// model picture the colour comparison cannot tell it). White surfaces and highlights cannot be
+/// told apart.
+bool may_be_glare(const CellLook& look, double light);
+
 /// Whether a compared cell of `cmp` shows something other than the print: textured and
 /// correlating under kMaxForeignCorrelation, or flat where the print, with as much of its detail
 /// as the frame keeps where it is seen, would show clearly and no highlight washes it out
-/// (kFlatCoverDetail, kFlatCoverShare, kGlareLevels). A flat cell in a dim or blurred frame,
+/// (kFlatCoverDetail, kFlatCoverShare, may_be_glare). A flat cell in a dim or blurred frame,
 /// where the print keeps little detail anywhere, denies nothing.
 bool denies_print(const CellLook& look, const CellComparison& cmp);
 

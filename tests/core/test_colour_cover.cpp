@@ -2,7 +2,9 @@
 // Pick safety in colour: an object of another colour lying on a plain part of a colour print,
 // as light as the print there (the grey comparison sees flat on flat), makes the instance
 // covered when the frame has colour; a highlight and a coloured light do not. Scenes built
-// from a crop of OpenCV's fruits.jpg beside a plain orange panel.
+// from a crop of OpenCV's fruits.jpg beside a plain orange panel. On a grey picture (box.png),
+// a plain disc of clear colour lighter than the print covers it; a highlight does not.
+#include "../support/box.hpp"
 #include "../support/colour_print.hpp"
 #include "../support/folder_test.hpp"
 #include "common/scene.hpp"
@@ -31,6 +33,42 @@ const Pose kPose{{480.f, 330.f}, 20.0, 0.9};
 
 double grey_level(const cv::Vec3b& bgr) {
   return 0.114 * bgr[0] + 0.587 * bgr[1] + 0.299 * bgr[2];
+}
+
+/// The one instance of `models` found in `frame` (BGR), with the colour frame or in grey only.
+Instance detect_one(const std::vector<Model>& models, const cv::Mat& frame, bool in_colour) {
+  cv::Mat grey;
+  cv::cvtColor(frame, grey, cv::COLOR_BGR2GRAY);
+  const Detector detector(models);
+  const Detection d = in_colour ? detector.detect(grey, frame) : detector.detect(grey);
+  EXPECT_EQ(d.instances.size(), 1u);
+  return d.instances.empty() ? Instance() : d.instances.front();
+}
+
+/// Expects the one instance of `models` in `frame` to be found covered with the frame's colour
+/// (`why`) and not in grey (`why_not_in_grey`).
+void expect_covered_in_colour_only(const std::vector<Model>& models, const cv::Mat& frame,
+                                   const char* why_not_in_grey, const char* why) {
+  const Instance in_grey = detect_one(models, frame, false);
+  EXPECT_FALSE(in_grey.covered) << why_not_in_grey;
+  const Instance in_colour = detect_one(models, frame, true);
+  EXPECT_TRUE(in_colour.covered) << why;
+  EXPECT_FALSE(in_colour.pickable);
+}
+
+/// A white highlight on `frame` (BGR): a disc of `radius` around `centre`, blurred, towards
+/// level 245 (lighter and greyer than a print, as glare is).
+void add_highlight(cv::Mat& frame, cv::Point centre, int radius) {
+  cv::Mat spot = cv::Mat::zeros(frame.size(), CV_32F);
+  cv::circle(spot, centre, radius, cv::Scalar(1.0), cv::FILLED);
+  cv::GaussianBlur(spot, spot, cv::Size(0, 0), 8.0);
+  for (int y = 0; y < frame.rows; ++y)
+    for (int x = 0; x < frame.cols; ++x) {
+      const float a = spot.at<float>(y, x);
+      cv::Vec3b& p = frame.at<cv::Vec3b>(y, x);
+      for (int c = 0; c < 3; ++c)
+        p[c] = cv::saturate_cast<uchar>(p[c] * (1.0f - a) + 245.0f * a);
+    }
 }
 
 /// A blue-green as light as the orange in grey.
@@ -69,16 +107,6 @@ protected:
     return {static_cast<int>(std::lround(q.x)), static_cast<int>(std::lround(q.y))};
   }
 
-  /// The one instance found in `frame`, with the colour frame or in grey only.
-  Instance detect_one(const cv::Mat& frame, bool in_colour) const {
-    cv::Mat grey;
-    cv::cvtColor(frame, grey, cv::COLOR_BGR2GRAY);
-    const Detector detector(models_);
-    const Detection d = in_colour ? detector.detect(grey, frame) : detector.detect(grey);
-    EXPECT_EQ(d.instances.size(), 1u);
-    return d.instances.empty() ? Instance() : d.instances.front();
-  }
-
   cv::Mat picture_;
   std::vector<Model> models_;
 };
@@ -93,27 +121,16 @@ TEST_F(ColourCover, AnObjectOfAnotherColourOnAPlainPartOfThePrintCoversIt) {
   cv::ellipse(frame, centre, {34, 26}, kPose.angle, 0, 360, cv::Scalar(teal[0], teal[1], teal[2]),
               cv::FILLED, cv::LINE_AA);
 
-  const Instance in_grey = detect_one(frame, false);
-  EXPECT_FALSE(in_grey.covered) << "in grey the card is flat on flat: nothing tells it";
-  const Instance in_colour = detect_one(frame, true);
-  EXPECT_TRUE(in_colour.covered) << "the card's colour is not the print's";
-  EXPECT_FALSE(in_colour.pickable);
+  expect_covered_in_colour_only(models_, frame,
+                                "in grey the card is flat on flat: nothing tells it",
+                                "the card's colour is not the print's");
 }
 
 TEST_F(ColourCover, AHighlightOrAColouredLightCoversNothing) {
-  // A white highlight over the panel: lighter and greyer than the print, as glare is.
+  // A white highlight over the panel.
   cv::Mat glare = scene();
-  cv::Mat spot = cv::Mat::zeros(glare.size(), CV_32F);
-  cv::circle(spot, to_scene({380.f, 110.f}, picture_.size()), 30, cv::Scalar(1.0), cv::FILLED);
-  cv::GaussianBlur(spot, spot, cv::Size(0, 0), 8.0);
-  for (int y = 0; y < glare.rows; ++y)
-    for (int x = 0; x < glare.cols; ++x) {
-      const float a = spot.at<float>(y, x);
-      cv::Vec3b& p = glare.at<cv::Vec3b>(y, x);
-      for (int c = 0; c < 3; ++c)
-        p[c] = cv::saturate_cast<uchar>(p[c] * (1.0f - a) + 245.0f * a);
-    }
-  const Instance under_glare = detect_one(glare, true);
+  add_highlight(glare, to_scene({380.f, 110.f}, picture_.size()), 30);
+  const Instance under_glare = detect_one(models_, glare, true);
   EXPECT_FALSE(under_glare.covered) << "a highlight is not an object";
   EXPECT_TRUE(under_glare.pickable);
 
@@ -124,7 +141,53 @@ TEST_F(ColourCover, AHighlightOrAColouredLightCoversNothing) {
   channels[0] *= 0.8;
   channels[2] *= 1.15;
   cv::merge(channels, warm);
-  const Instance in_warm_light = detect_one(warm, true);
+  const Instance in_warm_light = detect_one(models_, warm, true);
   EXPECT_FALSE(in_warm_light.covered) << "the light's colour is the same all over the instance";
   EXPECT_TRUE(in_warm_light.pickable);
+}
+
+namespace {
+
+/// A frame in colour holding OpenCV's box.png (a grey picture) at kPose.
+cv::Mat box_frame() {
+  cv::Mat frame, picture;
+  cv::cvtColor(test_scene::smooth_noise_background({1000, 700}, 5), frame, cv::COLOR_GRAY2BGR);
+  cv::cvtColor(test_scene::box_picture(), picture, cv::COLOR_GRAY2BGR);
+  test_scene::paste(frame, picture, {kPose});
+  return frame;
+}
+
+/// Where box.png's point (200, 150) lies in box_frame(): on its print, whose grey level there
+/// is about 113.
+cv::Point on_box_print() {
+  const cv::Mat picture = test_scene::box_picture();
+  const cv::Point2f at =
+      test_scene::apply(test_scene::model_to_scene(picture.size(), kPose), {200.f, 150.f});
+  return {cvRound(at.x), cvRound(at.y)};
+}
+
+} // namespace
+
+// A model picture without colour tells nothing of the product's colours, but a highlight takes
+// the light's colour, near white: a plain disc of clear colour, lighter than the print under it
+// (which in grey cannot be told from glare washing the print out), lies on the box.
+TEST(ColourCoverOnAGreyPicture, APlainDiscOfClearColourLighterThanThePrintCoversIt) {
+  const cv::Vec3b light_green(120, 240, 120); // grey level about 191
+  ASSERT_GT(grey_level(light_green), 113 + 30 + 30)
+      << "the disc must be lighter than glare's limit";
+  cv::Mat frame = box_frame();
+  cv::ellipse(frame, on_box_print(), {30, 22}, kPose.angle, 0, 360,
+              cv::Scalar(light_green[0], light_green[1], light_green[2]), cv::FILLED, cv::LINE_AA);
+
+  expect_covered_in_colour_only({test_scene::box_model()}, frame,
+                                "in grey a lighter plain patch may be glare: nothing tells it",
+                                "glare is not green");
+}
+
+TEST(ColourCoverOnAGreyPicture, AHighlightCoversNothing) {
+  cv::Mat frame = box_frame();
+  add_highlight(frame, on_box_print(), 28);
+  const Instance under_glare = detect_one({test_scene::box_model()}, frame, true);
+  EXPECT_FALSE(under_glare.covered) << "a highlight is not an object";
+  EXPECT_TRUE(under_glare.pickable);
 }
