@@ -277,9 +277,9 @@ GstFlowReturn detect_and_draw(GstElement* element, GstVideoFrame& frame, const F
   try {
     cv::Mat scratch, colour_scratch;
     const cv::Mat grey = format.grey(frame, scratch);
-    // The colour only tells look-alikes apart whose models have colour.
-    const cv::Mat colour =
-        detector.has_colour_models() ? format.colour(frame, colour_scratch) : cv::Mat();
+    // The frame's colour, whenever its format has colour: it tells look-alikes apart whose
+    // models have colour, and covers from highlights on any model (a highlight is near white).
+    const cv::Mat colour = format.colour(frame, colour_scratch);
     if (reuse) {
       detection = reuse->detect(detector, grey, config.settings, colour);
       found.reuse = reuse->last();
