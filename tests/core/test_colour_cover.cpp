@@ -79,6 +79,23 @@ cv::Vec3b teal_like_orange() {
                    static_cast<uchar>(r));
 }
 
+/// A frame in colour holding OpenCV's box.png (a grey picture) at kPose.
+cv::Mat box_frame() {
+  cv::Mat frame, picture;
+  cv::cvtColor(test_scene::smooth_noise_background({1000, 700}, 5), frame, cv::COLOR_GRAY2BGR);
+  cv::cvtColor(test_scene::box_model().image, picture, cv::COLOR_GRAY2BGR);
+  test_scene::paste(frame, picture, {kPose});
+  return frame;
+}
+
+/// Where box.png's point (200, 150) lies in box_frame(): on its print, whose grey level there
+/// is about 113.
+cv::Point on_box_print() {
+  const cv::Point2f at = test_scene::apply(
+      test_scene::model_to_scene(test_scene::box_model().image.size(), kPose), {200.f, 150.f});
+  return {cvRound(at.x), cvRound(at.y)};
+}
+
 class ColourCover : public test_scene::FolderTest {
 protected:
   ColourCover() : FolderTest("pickdetect-colour-cover-") {}
@@ -145,28 +162,6 @@ TEST_F(ColourCover, AHighlightOrAColouredLightCoversNothing) {
   EXPECT_FALSE(in_warm_light.covered) << "the light's colour is the same all over the instance";
   EXPECT_TRUE(in_warm_light.pickable);
 }
-
-namespace {
-
-/// A frame in colour holding OpenCV's box.png (a grey picture) at kPose.
-cv::Mat box_frame() {
-  cv::Mat frame, picture;
-  cv::cvtColor(test_scene::smooth_noise_background({1000, 700}, 5), frame, cv::COLOR_GRAY2BGR);
-  cv::cvtColor(test_scene::box_picture(), picture, cv::COLOR_GRAY2BGR);
-  test_scene::paste(frame, picture, {kPose});
-  return frame;
-}
-
-/// Where box.png's point (200, 150) lies in box_frame(): on its print, whose grey level there
-/// is about 113.
-cv::Point on_box_print() {
-  const cv::Mat picture = test_scene::box_picture();
-  const cv::Point2f at =
-      test_scene::apply(test_scene::model_to_scene(picture.size(), kPose), {200.f, 150.f});
-  return {cvRound(at.x), cvRound(at.y)};
-}
-
-} // namespace
 
 // A model picture without colour tells nothing of the product's colours, but a highlight takes
 // the light's colour, near white: a plain disc of clear colour, lighter than the print under it
