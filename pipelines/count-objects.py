@@ -11,7 +11,10 @@ program prints those messages; only GStreamer's own Python bindings are needed.
 
 INPUT is a video file, or a numbered picture sequence as multifilesrc reads it
 (scenes/%04d.jpg, at --fps frames a second). The uninstalled plugin is found through
-GST_PLUGIN_PATH=<builddir>/gst, or PICKDETECT_BUILD_DIR=<builddir>, or --build-dir.
+GST_PLUGIN_PATH=<builddir>/gst, or PICKDETECT_BUILD_DIR=<builddir>, or --build-dir. At camera
+rate on large frames, start it with glibc's freed memory kept in the process:
+GLIBC_TUNABLES=glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=1073741824
+(docs/performance.md, "The process's heap").
 
 Output, one line per counted object, then the totals:
     counted model=box track=3 count=1 total=1 time=0:00:00.833333333
