@@ -44,6 +44,16 @@ constexpr float kRepeatOrbDistance = 20.f;
 /// two keypoints of one spot at other orientations are not taken for copies.
 constexpr float kRepeatGapSizes = 2.f;
 constexpr float kMinRepeatGapPx = 8.f;
+/// Shared designs: a row's twins are the descriptors of other products within the SIFT
+/// repeat distance above, among its kTwinNeighbours nearest. A product whose twins cover at least
+/// kEditionShare of a model's rows is an edition of it (one design in other colours: the
+/// frame's colour tells them apart, or nothing does); below, it shares a part (a family's
+/// panel), and matches there say nothing of which product an object is.
+constexpr int kTwinNeighbours = 8;
+constexpr double kEditionShare = 0.5;
+/// Leaves the twins' kd-tree search visits: four times the matching's, as twins lie farther
+/// apart than the matches the ratio test keeps (32 missed some at 73-98 of the 100).
+constexpr int kTwinChecks = 128;
 
 int find_root(std::vector<int>& parent, int i) {
   while (parent[i] != i)
@@ -131,6 +141,45 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
         descriptors_, cv::flann::KDTreeIndexParams(kKdTrees), cvflann::FLANN_DIST_L2);
   }
   find_repeats(models);
+  find_shared_designs();
+}
+
+void Matcher::find_shared_designs() {
+  const int n = descriptors_.rows;
+  shared_design_.assign(static_cast<size_t>(n), 0);
+  const size_t n_models = offset_.size();
+  // SIFT's kd-tree finds the twins in about a quarter of a second for three models with their
+  // tilted views (17 000 descriptors). ORB's matcher is built beside SIFT's for every detector:
+  // its exhaustive search would cost as much again at every start, whatever the features used.
+  if (n < 2 || n_models < 2 || kind_ != FeatureKind::Sift || !index_)
+    return;
+  const int k = std::min(kTwinNeighbours, n);
+  cv::Mat indices, distances;
+  nearest(descriptors_, k, Search::KdTree, indices, distances, kTwinChecks);
+  // Row -> the other products it has a twin in; per model, how many of its rows have one there.
+  std::vector<std::vector<int>> twin_in(static_cast<size_t>(n));
+  std::vector<std::vector<int>> rows_with_twin(n_models, std::vector<int>(n_models, 0));
+  for (int i = 0; i < n; ++i) {
+    const int own = product_[static_cast<size_t>(owner_[i])];
+    std::vector<int>& in = twin_in[static_cast<size_t>(i)];
+    for (int j = 0; j < k; ++j) {
+      const int other = indices.at<int>(i, j);
+      if (other < 0 || distances.at<float>(i, j) >= kRepeatSiftDistance)
+        continue;
+      const int product = product_[static_cast<size_t>(owner_[other])];
+      if (product != own && std::find(in.begin(), in.end(), product) == in.end())
+        in.push_back(product);
+    }
+    for (int product : in)
+      ++rows_with_twin[static_cast<size_t>(owner_[i])][static_cast<size_t>(product)];
+  }
+  for (int i = 0; i < n; ++i) {
+    const size_t m = static_cast<size_t>(owner_[i]);
+    const int rows = (m + 1 < n_models ? offset_[m + 1] : n) - offset_[m];
+    for (int product : twin_in[static_cast<size_t>(i)])
+      if (rows_with_twin[m][static_cast<size_t>(product)] < kEditionShare * rows)
+        shared_design_[static_cast<size_t>(i)] = 1;
+  }
 }
 
 void Matcher::find_repeats(const std::vector<Model>& models) {
@@ -238,6 +287,7 @@ bool Matcher::same_place(int a, int b) const {
 void Matcher::push_match(std::vector<Match>& matches, int row, int scene_point, float distance,
                          float ratio, bool shared) const {
   // A repeated part could be any of its copies: one match (one vote) for each.
+  shared = shared || shared_design_[static_cast<size_t>(row)];
   if (copies_[row].empty()) {
     matches.push_back(make_match(row, scene_point, distance, ratio));
     matches.back().shared = shared;
@@ -250,7 +300,7 @@ void Matcher::push_match(std::vector<Match>& matches, int row, int scene_point, 
 }
 
 void Matcher::nearest(const cv::Mat& queries, int k, Search search, cv::Mat& indices,
-                      cv::Mat& distances) const {
+                      cv::Mat& distances, int checks) const {
   const int n = queries.rows;
   indices.create(n, k, CV_32S);
   distances.create(n, k, CV_32F);
@@ -259,7 +309,7 @@ void Matcher::nearest(const cv::Mat& queries, int k, Search search, cv::Mat& ind
       for (int b = r.start; b < r.end; ++b) {
         const cv::Range rows(b * kSearchBlock, std::min(n, (b + 1) * kSearchBlock));
         cv::Mat idx = indices.rowRange(rows), dist = distances.rowRange(rows);
-        index_->knnSearch(queries.rowRange(rows), idx, dist, k, cv::flann::SearchParams(kKdChecks));
+        index_->knnSearch(queries.rowRange(rows), idx, dist, k, cv::flann::SearchParams(checks));
       }
     });
     cv::sqrt(distances, distances); // FLANN gives squared L2
@@ -294,7 +344,7 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
                              ? std::clamp(2 * n_models, 2, kMaxNeighbours) + largest_group_ - 1
                              : 1 + largest_group_);
   cv::Mat indices, distances;
-  nearest(scene_descriptors, k, search, indices, distances);
+  nearest(scene_descriptors, k, search, indices, distances, kKdChecks);
   std::vector<int> first(n_models);
   for (int i = 0; i < n; ++i) {
     const int* idx = indices.ptr<int>(i);

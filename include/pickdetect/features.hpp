@@ -89,7 +89,9 @@ struct Match {
   int scene_point = 0;  ///< Keypoint index in the scene.
   float distance = 0.f; ///< Descriptor distance to the nearest neighbour.
   float ratio = 0.f;    ///< Nearest / second nearest distance (lower is more distinctive).
-  bool shared = false;  ///< The scene feature fits other models about as well (Ambiguity::Share).
+  /// The scene feature fits other models about as well (Ambiguity::Share), or its model
+  /// keypoint lies on a part of the picture another product shares (a family's panel).
+  bool shared = false;
 };
 
 } // namespace pickdetect

@@ -61,13 +61,17 @@ public:
 
 private:
   /// The k nearest model descriptors of each query row (indices, -1 where none; L2 or Hamming
-  /// distances).
-  void nearest(const cv::Mat& queries, int k, Search search, cv::Mat& indices,
-               cv::Mat& distances) const;
+  /// distances); `checks`: the leaves a kd-tree search visits.
+  void nearest(const cv::Mat& queries, int k, Search search, cv::Mat& indices, cv::Mat& distances,
+               int checks) const;
   Match make_match(int row, int scene_point, float distance, float ratio) const;
   /// Repeated designs: groups the rows that are copies of one printed part of their model
   /// picture (the picture matched against itself).
   void find_repeats(const std::vector<Model>& models);
+  /// Designs shared by look-alike products: marks the rows with a twin among another
+  /// product's descriptors, where that product shares a part of the picture only (a family's
+  /// brand panel), not the whole of it (an edition in other colours).
+  void find_shared_designs();
   /// Appends the match of a scene feature to `row`, or, when `row` is a copy of a repeated
   /// part, one match to each of its copies.
   void push_match(std::vector<Match>& matches, int row, int scene_point, float distance,
@@ -88,6 +92,9 @@ private:
   std::vector<std::vector<int>> copies_; ///< Row -> the rows of its group (empty: none).
   std::vector<std::vector<cv::Point2f>> shifts_; ///< Model index -> repeat_shifts.
   int largest_group_ = 1;
+  /// Row -> whether its keypoint lies on a design another product shares (find_shared_designs):
+  /// its matches are `shared`, whichever of the products the scene feature lies nearest.
+  std::vector<char> shared_design_;
 };
 
 } // namespace pickdetect

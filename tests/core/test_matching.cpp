@@ -2,12 +2,14 @@
 // Matching: the 2NN ratio test over all models at once, look-alike features rejected or shared,
 // kd-tree against brute force.
 #include "../support/box.hpp"
+#include "../support/folder_test.hpp"
 #include "common/scene.hpp"
 
 #include <pickdetect/matching.hpp>
 #include <pickdetect/pickdetect.hpp>
 
 #include <gtest/gtest.h>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -112,4 +114,61 @@ TEST(Matcher, ARepeatedDesignHasTheShiftsBetweenItsCopies) {
     EXPECT_TRUE(found) << "no shift of (" << expected << ", 0)";
   }
   EXPECT_TRUE(matcher.repeat_shifts(2).empty()) << "no third model";
+}
+
+namespace {
+
+class FamilyMatching : public test_scene::FolderTest {
+protected:
+  FamilyMatching() : FolderTest("pickdetect-family-matching-") {}
+  /// A product of a family, as pickdetect-synth --family makes it: the top 40 % of box.png (the
+  /// brand's panel) over a picture of its own (`own`, from OpenCV's samples).
+  Model member(const std::string& own) const {
+    const cv::Mat box = test_scene::box_picture();
+    const cv::Rect part(0, kPanel, box.cols, box.rows - kPanel);
+    cv::Mat picture = box.clone();
+    const cv::Mat other =
+        cv::imread(std::string(PICKDETECT_TEST_DATA) + "/" + own, cv::IMREAD_GRAYSCALE);
+    EXPECT_FALSE(other.empty()) << own;
+    cv::resize(other, picture(part), part.size(), 0, 0, cv::INTER_AREA);
+    const std::string file = path("box_" + own.substr(0, own.find('.')) + ".png");
+    cv::imwrite(file, picture);
+    return load_model(file);
+  }
+  const int kPanel = test_scene::box_picture().rows * 2 / 5;
+};
+
+} // namespace
+
+// A product's keypoints on the panel its family shares tell nothing of which product an object
+// is: their matches are shared even where the scene feature lies nearer one product's copy of
+// the panel (its descriptor taken off the product's own picture, a hair away from the other's).
+// Keypoints of the product's own part are not.
+TEST_F(FamilyMatching, APartSharedByAFamilyNamesNoProduct) {
+  const Model fruits = member("fruits.jpg");
+  const Model home = member("home.jpg");
+  const Matcher matcher({fruits, home});
+  const std::vector<Match> matches =
+      matcher.match(fruits.sift.descriptors, 0.9, Search::BruteForce, Ambiguity::Share);
+  // The rows of `fruits` that have a twin in `home` (within the repeat distance, 100), found by
+  // brute force, and the rows wholly inside fruits' own part.
+  cv::BFMatcher bf(cv::NORM_L2);
+  std::vector<std::vector<cv::DMatch>> twins;
+  bf.radiusMatch(fruits.sift.descriptors, home.sift.descriptors, twins, 100.f);
+  int twin_matches = 0, own_matches = 0, own_shared = 0;
+  for (const Match& m : matches) {
+    if (m.model != 0)
+      continue;
+    const cv::KeyPoint& k = fruits.sift.keypoints[static_cast<size_t>(m.model_point)];
+    if (!twins[static_cast<size_t>(m.scene_point)].empty()) {
+      ++twin_matches;
+      EXPECT_TRUE(m.shared) << "a panel feature at (" << k.pt.x << ", " << k.pt.y << ")";
+    } else if (k.pt.y - k.size > kPanel) {
+      ++own_matches;
+      own_shared += m.shared;
+    }
+  }
+  EXPECT_GT(twin_matches, 50);
+  EXPECT_GT(own_matches, 50);
+  EXPECT_LT(own_shared, own_matches / 10) << "the own part is no shared design";
 }
