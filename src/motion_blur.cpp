@@ -23,8 +23,12 @@ constexpr double kAxisSlack = 0.02;
 constexpr double kLengthStep = 0.5;
 /// The blur is measured on at most this many pixels a side of the middle of the instance.
 constexpr int kMeasuredSide = 160;
-/// The gradients are compared after a Gaussian blur of this sigma (pixels).
-constexpr double kStreakSigma = 3.0;
+/// Changes of light slower than a Gaussian of this sigma (pixels) are left out of the
+/// comparison: a highlight or a shadow on the object is not in its picture.
+constexpr double kLightSigma = 8.0;
+/// The lens's own round blur, which the frame has and the picture has not, is matched by one of
+/// these Gaussian sigmas (pixels), so that the box does not stretch to stand in for it.
+constexpr double kRoundBlurs[] = {0.0, 0.7, 1.4};
 
 /// The weights of a centred box of `length` pixels on whole-pixel offsets -r..r (the end
 /// pixels partly covered), summing to 1.
@@ -102,19 +106,12 @@ double correlation(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask) {
   return cv::mean(product, mask)[0] / (sa[0] * sb[0]);
 }
 
-/// How much more the picture `f` (CV_32F) varies across `direction` than along it, over
-/// `mask`: the log of the ratio of the mean squared gradients, after a slight blur that keeps
-/// the sensor noise out of them.
-double streak(const cv::Mat& f, const cv::Point2f& direction, const cv::Mat& mask) {
-  cv::Mat smooth, gx, gy;
-  cv::GaussianBlur(f, smooth, cv::Size(0, 0), kStreakSigma);
-  cv::Sobel(smooth, gx, CV_32F, 1, 0);
-  cv::Sobel(smooth, gy, CV_32F, 0, 1);
-  const cv::Mat along = gx * direction.x + gy * direction.y;
-  const cv::Mat across = gy * direction.x - gx * direction.y;
-  const double a = cv::mean(along.mul(along), mask)[0];
-  const double c = cv::mean(across.mul(across), mask)[0];
-  return std::log((c + 1e-6) / (a + 1e-6));
+/// `f` (CV_32F) without its slow changes of light (a highlight, a shadow, shading): what is
+/// left after taking out its blur of kLightSigma.
+cv::Mat detail_of(const cv::Mat& f) {
+  cv::Mat slow;
+  cv::GaussianBlur(f, slow, cv::Size(0, 0), kLightSigma);
+  return f - slow;
 }
 
 } // namespace
@@ -163,32 +160,53 @@ std::optional<double> measure_blur_length(const cv::Mat& grey, const Model& mode
   picture.convertTo(drawn, CV_32F);
   const cv::Point2f direction(static_cast<float>(step.x / longest),
                               static_cast<float>(step.y / longest));
-  // The length whose blur streaks the picture along the motion as much as the frame is: the
-  // ratio of the gradients along and across the motion, which a pose a pixel off, the lens's
-  // own (round) blur and the light change little. The longer the blur, the more it streaks:
-  // the length is found by halving the span it lies in.
-  const double wanted = streak(seen, direction, mask);
-  auto blurred_by = [&](double length) {
-    cv::Mat blurred; // Not in place: each length blurs the drawn picture afresh.
+  auto blurred_by = [&](const cv::Mat& f, double length) {
     if (length < 1.0)
-      return drawn;
-    cv::filter2D(drawn, blurred, -1, line_kernel(direction, length), cv::Point(-1, -1), 0,
+      return f;
+    // Only the kernel's nonzero rows and columns (one row along the rows): filter2D's cost
+    // follows the kernel's area.
+    const cv::Mat kernel = line_kernel(direction, length);
+    const cv::Rect used = cv::boundingRect(kernel != 0);
+    cv::Mat blurred;
+    cv::filter2D(f, blurred, -1, kernel(used),
+                 cv::Point(kernel.cols / 2 - used.x, kernel.rows / 2 - used.y), 0,
                  cv::BORDER_REPLICATE);
     return blurred;
   };
-  double shorter = 0.0, longer = longest;
-  if (streak(drawn, direction, mask) >= wanted)
-    longer = 0.0; // No more streaked than the sharp picture: no blur.
-  else if (streak(blurred_by(longest), direction, mask) <= wanted)
-    shorter = longest; // At least as streaked as the longest blur the motion allows.
-  while (longer - shorter > kLengthStep / 2) {
-    const double middle = (shorter + longer) / 2;
-    (streak(blurred_by(middle), direction, mask) < wanted ? shorter : longer) = middle;
+  // The length whose box blur of the picture is most like the frame's pixels (normalised
+  // correlation of their detail, the light's slow changes left out): sensor noise and a
+  // highlight are no more like one length than another. Whole pixels first, for each round
+  // blur of the lens, then half a pixel either side of the best.
+  const cv::Mat seen_detail = detail_of(seen), drawn_detail = detail_of(drawn);
+  double best = -2.0, best_length = 0.0;
+  cv::Mat best_round;
+  for (const double sigma : kRoundBlurs) {
+    cv::Mat round; // Its own pixels: drawn_detail stays as it is for the next sigma.
+    if (sigma > 0.0)
+      cv::GaussianBlur(drawn_detail, round, cv::Size(0, 0), sigma);
+    else
+      round = drawn_detail;
+    for (double length = 0.0; length <= longest; length += 1.0) {
+      const double c = correlation(blurred_by(round, length), seen_detail, mask);
+      if (c > best) {
+        best = c;
+        best_length = length;
+        best_round = round;
+      }
+    }
   }
-  const double best_length = std::round((shorter + longer) / 2 / kLengthStep) * kLengthStep;
-  const cv::Mat best_blurred = blurred_by(best_length);
+  const double coarse = best_length;
+  for (const double length : {coarse - kLengthStep, coarse + kLengthStep}) {
+    if (length < 1.0 || length > longest)
+      continue;
+    const double c = correlation(blurred_by(best_round, length), seen_detail, mask);
+    if (c > best) {
+      best = c;
+      best_length = length;
+    }
+  }
   // The instance must lie there: its blurred picture like the frame's pixels.
-  if (correlation(best_blurred, seen, mask) < least_correlation)
+  if (correlation(blurred_by(drawn, best_length), seen, mask) < least_correlation)
     return std::nullopt;
   return best_length;
 }
