@@ -4,6 +4,7 @@
 #include <pickdetect/features.hpp>
 #include <pickdetect/model.hpp>
 
+#include "object_mask.hpp"
 #include "open_file_storage.hpp"
 
 #include <opencv2/core/persistence.hpp>
@@ -271,11 +272,12 @@ cv::Mat read_descriptors(const cv::FileNode& node, size_t rows, int cols, const 
 
 /// Appends the SIFT features of the picture's tilted views (Model::max_tilt_deg), found at
 /// SIFT's contrast threshold `contrast_threshold`, to `f`.
-static void add_tilted_views(const Model& model, Features& f, double contrast_threshold) {
+static void add_tilted_views(const Model& model, const cv::Mat& picture, Features& f,
+                             double contrast_threshold) {
   if (!(model.max_tilt_deg > 0.0))
     return;
   for (const TiltedView& view : tilted_views(model.max_tilt_deg)) {
-    const Features v = features_of_view(model.image, model.mask, view, contrast_threshold);
+    const Features v = features_of_view(picture, model.mask, view, contrast_threshold);
     f.keypoints.insert(f.keypoints.end(), v.keypoints.begin(), v.keypoints.end());
     if (!v.descriptors.empty())
       f.descriptors.push_back(v.descriptors);
@@ -288,20 +290,21 @@ void compute_model_features(Model& model) {
   // the threshold until the picture has enough. A model picture is one clean picture, so its
   // weak extrema are print, not the noise a frame's would be.
   double threshold = kSiftContrastThreshold;
-  Features f = extract_features(model.image, model.mask, FeatureKind::Sift, threshold);
+  const cv::Mat picture = detail::continue_object(model.image, model.mask);
+  Features f = extract_features(picture, model.mask, FeatureKind::Sift, threshold);
   while (static_cast<int>(f.keypoints.size()) < kModelKeypointTarget &&
          threshold / 2 >= kLeastModelContrastThreshold - 1e-12) {
     threshold /= 2;
-    f = extract_features(model.image, model.mask, FeatureKind::Sift, threshold);
+    f = extract_features(picture, model.mask, FeatureKind::Sift, threshold);
   }
   if (static_cast<int>(f.keypoints.size()) < kMinModelKeypoints)
     throw Error("model picture " + in_quotes(model.image_path) + " yields only " +
                 std::to_string(f.keypoints.size()) + " SIFT keypoints (at least " +
                 std::to_string(kMinModelKeypoints) + " are needed): it has too little texture");
-  add_tilted_views(model, f, threshold);
+  add_tilted_views(model, picture, f, threshold);
   model.contrast_threshold = threshold;
   model.sift = std::move(f);
-  model.orb = extract_features(model.image, model.mask, FeatureKind::Orb);
+  model.orb = extract_features(picture, model.mask, FeatureKind::Orb);
 }
 
 Model model_from_picture(const std::string& picture_path, const std::string& name) {
@@ -401,7 +404,8 @@ Model read_model(const cv::FileNode& node, const cv::FileNode& product, const st
         throw Error(origin + ": 'contrast_threshold' must lie above 0 and at most 1");
     }
     if (!tilt_given)
-      add_tilted_views(model, sift, model.contrast_threshold);
+      add_tilted_views(model, detail::continue_object(model.image, model.mask), sift,
+                       model.contrast_threshold);
     if (!node["orb_keypoints"].empty() && !node["orb_descriptors"].empty()) {
       cv::read(node["orb_keypoints"], model.orb.keypoints);
       model.orb.descriptors = read_descriptors(node["orb_descriptors"], model.orb.keypoints.size(),
@@ -410,7 +414,8 @@ Model read_model(const cv::FileNode& node, const cv::FileNode& product, const st
           (!model.orb.descriptors.empty() && model.orb.descriptors.type() != CV_8U))
         throw Error(origin + ": the cached ORB keypoints and descriptors do not agree");
     } else {
-      model.orb = extract_features(model.image, model.mask, FeatureKind::Orb);
+      model.orb = extract_features(detail::continue_object(model.image, model.mask), model.mask,
+                                   FeatureKind::Orb);
     }
   } else {
     try {

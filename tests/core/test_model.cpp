@@ -73,6 +73,34 @@ TEST_F(ModelFiles, AlphaMarksTheObjectAndGivesItsOutline) {
         << "keypoint outside the object at (" << k.pt.x << ", " << k.pt.y << ")";
 }
 
+TEST_F(ModelFiles, TheColourOfTransparentPixelsChangesNoFeature) {
+  // The same object on canvases whose transparent pixels are black, light and white: that
+  // colour is no part of the object, so the features (keypoints on the outline among them, and
+  // the descriptors beside it) must not depend on it. Light transparent pixels around a dark
+  // print made an edge whose keypoints agreed with a belt's light border (docs/tracking.md).
+  const cv::Mat box = cv::imread(kData + "/box.png", cv::IMREAD_COLOR);
+  std::vector<Model> models;
+  for (const cv::Scalar& fill :
+       {cv::Scalar(0, 0, 0, 0), cv::Scalar(151, 200, 180, 0), cv::Scalar(255, 255, 255, 0)}) {
+    cv::Mat rgba(box.rows + 40, box.cols + 60, CV_8UC4, fill);
+    cv::Mat inner;
+    cv::cvtColor(box, inner, cv::COLOR_BGR2BGRA);
+    inner.copyTo(rgba(cv::Rect(30, 20, box.cols, box.rows)));
+    const std::string file = path("boxed" + std::to_string(models.size()) + ".png");
+    cv::imwrite(file, rgba);
+    models.push_back(load_model(file));
+  }
+  for (size_t i = 1; i < models.size(); ++i) {
+    for (const auto& [a, b] :
+         {std::pair(&models[0].sift, &models[i].sift), std::pair(&models[0].orb, &models[i].orb)}) {
+      ASSERT_EQ(a->keypoints.size(), b->keypoints.size()) << "fill " << i;
+      for (size_t k = 0; k < a->keypoints.size(); ++k)
+        EXPECT_EQ(a->keypoints[k].pt, b->keypoints[k].pt) << "fill " << i << ", keypoint " << k;
+      EXPECT_EQ(cv::norm(a->descriptors, b->descriptors, cv::NORM_INF), 0.0) << "fill " << i;
+    }
+  }
+}
+
 TEST_F(ModelFiles, TexturelessPictureIsRefusedWithTheCount) {
   cv::imwrite(path("flat.png"), cv::Mat(200, 300, CV_8UC1, cv::Scalar(90)));
   expect_refused(path("flat.png"), {path("flat.png"), "yields only 0", "keypoints"});
