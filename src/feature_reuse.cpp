@@ -177,6 +177,36 @@ bool ecc_shift(const cv::Mat& from, const cv::Mat& to, const std::vector<cv::Poi
   }
 }
 
+/// The parts of `box` moved by `shift` that lie in `frame` now and lay outside it before (at
+/// most one strip along each of two edges).
+std::vector<cv::Rect> came_into_view(const cv::Rect& box, const cv::Point2f& shift,
+                                     const cv::Rect& frame) {
+  const cv::Point step(cvRound(shift.x), cvRound(shift.y));
+  const cv::Rect now = (box + step) & frame;
+  std::vector<cv::Rect> strips;
+  auto add = [&](const cv::Rect& r) {
+    const cv::Rect in = r & now;
+    if (!in.empty())
+      strips.push_back(in);
+  };
+  if (step.x > 0)
+    add(cv::Rect(frame.x, frame.y, step.x, frame.height));
+  if (step.x < 0)
+    add(cv::Rect(frame.br().x + step.x, frame.y, -step.x, frame.height));
+  if (step.y > 0)
+    add(cv::Rect(frame.x, frame.y, frame.width, step.y));
+  if (step.y < 0)
+    add(cv::Rect(frame.x, frame.br().y + step.y, frame.width, -step.y));
+  return strips;
+}
+
+/// The blocks (row, column rectangle) that the pixels of `r` lie in.
+cv::Rect blocks_under(const cv::Rect& r) {
+  const cv::Point tl(r.x / kBlock, r.y / kBlock);
+  const cv::Point br((r.br().x + kBlock - 1) / kBlock, (r.br().y + kBlock - 1) / kBlock);
+  return cv::Rect(tl, br);
+}
+
 /// Whether enough of the instance is in the frame to follow it by its motion.
 bool in_view(const Instance& instance, const cv::Size& size) {
   const cv::Rect whole = box_of(instance.outline);
@@ -354,6 +384,12 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       explained(block_box(m->before)).setTo(255);
       explained(block_box(m->after)).setTo(255);
     }
+  // Where an instance came further into view, the blocks show more of it, not what it left:
+  // they are extracted (else an object entering the frame keeps the keypoints it was first
+  // found on, and the pose they gave, until the next whole frame).
+  for (const Moved& m : moved)
+    for (const cv::Rect& strip : came_into_view(box_of(m.instance->outline), m.shift, frame))
+      explained(blocks_under(strip) & blocks).setTo(0);
   const cv::Mat unexplained = changed & (explained == 0);
   std::vector<std::pair<const Instance*, cv::Point2f>> shifts;
   for (const Moved& m : moved)
