@@ -216,9 +216,10 @@ TEST(FeatureReuse, BoxEnteringFromTheEdgeIsFollowedFromWhereItWasFoundAgain) {
 
 TEST(FeatureReuse, BoxEnteringFromTheEdgeGainsWhatComesIntoView) {
   // A box first found with two fifths of it in view rides in, 20 px a frame, until all of it
-  // is. The blocks it came into are extracted as it comes: found on the keypoints of what is
-  // in view, as the whole frame finds it, not on those it was first found on (before: the
-  // same 15 matches, and their pose 7 px off, until the next whole frame; docs/tracking.md).
+  // is. What comes into view is extracted as it comes, and so are the keypoints whose windows
+  // the edge cut: it is found on the keypoints the whole frame gives, not on those it was first
+  // found on (before: the same 192 matches, until the next whole frame; with only what came
+  // into view extracted, 419, the keypoints cut by the edge kept; the whole frame 548).
   const Detector& detector = test_scene::box_detector();
   FeatureReuse reuse(30);
   for (int frame = 0; frame <= 12; ++frame) {
@@ -231,7 +232,7 @@ TEST(FeatureReuse, BoxEnteringFromTheEdgeGainsWhatComesIntoView) {
     ASSERT_FALSE(reuse.last().whole);
     const Detection want = detector.detect(grey, Settings());
     ASSERT_EQ(want.instances.size(), 1u);
-    EXPECT_GE(got.instances[0].matches, 0.6 * want.instances[0].matches); // 35 % before
+    EXPECT_GE(got.instances[0].matches, 0.95 * want.instances[0].matches);
     EXPECT_LE(cv::norm(got.instances[0].center - want.instances[0].center), 0.1);
   }
 }
