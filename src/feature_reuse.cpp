@@ -177,51 +177,6 @@ bool ecc_shift(const cv::Mat& from, const cv::Mat& to, const std::vector<cv::Poi
   }
 }
 
-/// Whether keypoint `k` of the last frame lay outside `frame`, or its window ran off an edge
-/// that a step of `shift` moves away from: it came into view, or it describes part of what lies
-/// there, cut by the edge. Keypoints that reach farther than a crop are left as they are (a crop
-/// could not give them whole either).
-bool cut_by_edge_left(const cv::KeyPoint& k, const cv::Point2f& shift, const cv::Rect& frame) {
-  const cv::Point step(cvRound(shift.x), cvRound(shift.y));
-  const double r = reach(k);
-  if (!frame.contains(cv::Point(cvFloor(k.pt.x), cvFloor(k.pt.y))))
-    return true;
-  if (r > kCropReach)
-    return false;
-  return (step.x > 0 && k.pt.x - r < frame.x) || (step.x < 0 && k.pt.x + r > frame.br().x) ||
-         (step.y > 0 && k.pt.y - r < frame.y) || (step.y < 0 && k.pt.y + r > frame.br().y);
-}
-
-/// The parts of `box` moved by `shift` that lie in `frame` now and lay outside it before (at
-/// most one strip along each of two edges).
-std::vector<cv::Rect> came_into_view(const cv::Rect& box, const cv::Point2f& shift,
-                                     const cv::Rect& frame) {
-  const cv::Point step(cvRound(shift.x), cvRound(shift.y));
-  const cv::Rect now = (box + step) & frame;
-  std::vector<cv::Rect> strips;
-  auto add = [&](const cv::Rect& r) {
-    const cv::Rect in = r & now;
-    if (!in.empty())
-      strips.push_back(in);
-  };
-  if (step.x > 0)
-    add(cv::Rect(frame.x, frame.y, step.x, frame.height));
-  if (step.x < 0)
-    add(cv::Rect(frame.br().x + step.x, frame.y, -step.x, frame.height));
-  if (step.y > 0)
-    add(cv::Rect(frame.x, frame.y, frame.width, step.y));
-  if (step.y < 0)
-    add(cv::Rect(frame.x, frame.br().y + step.y, frame.width, -step.y));
-  return strips;
-}
-
-/// The blocks (row, column rectangle) that the pixels of `r` lie in.
-cv::Rect blocks_under(const cv::Rect& r) {
-  const cv::Point tl(r.x / kBlock, r.y / kBlock);
-  const cv::Point br((r.br().x + kBlock - 1) / kBlock, (r.br().y + kBlock - 1) / kBlock);
-  return cv::Rect(tl, br);
-}
-
 /// Whether enough of the instance is in the frame to follow it by its motion.
 bool in_view(const Instance& instance, const cv::Size& size) {
   const cv::Rect whole = box_of(instance.outline);
@@ -399,30 +354,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       explained(block_box(m->before)).setTo(255);
       explained(block_box(m->after)).setTo(255);
     }
-  // Where an instance came further into view, the blocks show more of it, not what it left:
-  // they are extracted, as are the keypoints it carries whose windows ran off the edge it
-  // leaves (below; else an object entering the frame keeps the keypoints it was first found
-  // on, cut by the edge, and the pose they gave, until the next whole frame).
-  cv::Mat unexplained = changed & (explained == 0);
-  for (const Moved& m : moved)
-    for (const cv::Rect& strip : came_into_view(box_of(m.instance->outline), m.shift, frame))
-      unexplained(blocks_under(strip) & blocks).setTo(255);
-  // The moved instance that carries each keypoint of the last frame (nullptr: none).
-  std::vector<const Moved*> carrier(features_.keypoints.size(), nullptr);
-  for (size_t i = 0; i < carrier.size(); ++i) {
-    const cv::KeyPoint& k = features_.keypoints[i];
-    const auto m = std::find_if(moved.begin(), moved.end(),
-                                [&](const Moved& c) { return inside_outline(*c.instance, k.pt); });
-    if (m == moved.end())
-      continue;
-    carrier[i] = &*m;
-    if (cut_by_edge_left(k, m->shift, frame))
-      unexplained(blocks_under(cv::Rect(
-                      cv::Point(cvFloor(k.pt.x + m->shift.x), cvFloor(k.pt.y + m->shift.y)),
-                      cv::Size(1, 1))) &
-                  blocks)
-          .setTo(255);
-  }
+  const cv::Mat unexplained = changed & (explained == 0);
   std::vector<std::pair<const Instance*, cv::Point2f>> shifts;
   for (const Moved& m : moved)
     shifts.emplace_back(m.instance, m.shift);
@@ -439,11 +371,9 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   auto in_explained = [&](const cv::KeyPoint& k) {
     return explained.at<uchar>(block_of(k.pt, explained)) != 0;
   };
-  auto carried = [&](const cv::KeyPoint& k) { // A moved instance carried its keypoint there.
+  auto carried = [&](const cv::Point2f& p) { // A moved instance's keypoints lie there now.
     return std::any_of(moved.begin(), moved.end(), [&](const Moved& m) {
-      cv::KeyPoint before = k;
-      before.pt -= m.shift;
-      return inside_outline(*m.instance, before.pt) && !cut_by_edge_left(before, m.shift, frame);
+      return frame.contains(p - m.shift) && inside_outline(*m.instance, p - m.shift);
     });
   };
 
@@ -453,10 +383,11 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   std::vector<int> kept_rows;
   for (size_t i = 0; i < features_.keypoints.size(); ++i) {
     cv::KeyPoint k = features_.keypoints[i];
-    if (const Moved* c = carrier[i]) {
-      if (cut_by_edge_left(k, c->shift, frame))
-        continue; // Cut by the edge it leaves: extracted again where it came to.
-      k.pt += c->shift;
+    const auto carrier = std::find_if(moved.begin(), moved.end(), [&](const Moved& m) {
+      return inside_outline(*m.instance, k.pt);
+    });
+    if (carrier != moved.end()) {
+      k.pt += carrier->shift;
       if (!frame.contains(k.pt))
         continue; // Carried out of view.
     } else if (affected(k) || in_explained(k))
@@ -485,7 +416,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
     for (size_t i = 0; i < f.keypoints.size(); ++i) {
       cv::KeyPoint k = f.keypoints[i];
       k.pt += cv::Point2f(static_cast<float>(crop.x), static_cast<float>(crop.y));
-      if (affected(k) && supported_in(k, crop, grey.size()) && !carried(k)) {
+      if (affected(k) && supported_in(k, crop, grey.size()) && !carried(k.pt)) {
         fresh.keypoints.push_back(k);
         fresh.descriptors.push_back(f.descriptors.row(static_cast<int>(i)));
       }

@@ -213,26 +213,3 @@ TEST(FeatureReuse, BoxEnteringFromTheEdgeIsFollowedFromWhereItWasFoundAgain) {
     }
   }
 }
-
-TEST(FeatureReuse, BoxEnteringFromTheEdgeGainsWhatComesIntoView) {
-  // A box first found with two fifths of it in view rides in, 20 px a frame, until all of it
-  // is. What comes into view is extracted as it comes, and so are the keypoints whose windows
-  // the edge cut: it is found on the keypoints the whole frame gives, not on those it was first
-  // found on (before: the same 192 matches, until the next whole frame; with only what came
-  // into view extracted, 419, the keypoints cut by the edge kept; the whole frame 548).
-  const Detector& detector = test_scene::box_detector();
-  FeatureReuse reuse(30);
-  for (int frame = 0; frame <= 12; ++frame) {
-    const Pose riding{{-40.f + 20.f * frame, 400.f}, 0.0, 1.2};
-    const cv::Mat grey = scene_with({riding}, frame + 1);
-    const Detection got = reuse.detect(detector, grey, Settings());
-    ASSERT_EQ(got.instances.size(), 1u) << "frame " << frame;
-    if (frame < 12)
-      continue;
-    ASSERT_FALSE(reuse.last().whole);
-    const Detection want = detector.detect(grey, Settings());
-    ASSERT_EQ(want.instances.size(), 1u);
-    EXPECT_GE(got.instances[0].matches, 0.95 * want.instances[0].matches);
-    EXPECT_LE(cv::norm(got.instances[0].center - want.instances[0].center), 0.1);
-  }
-}
