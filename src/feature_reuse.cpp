@@ -105,6 +105,10 @@ struct Moved {
   cv::Rect before, after; ///< Its outline's box in the last frame and in this one.
   /// How far it moved since the whole frame, when it was followed from there.
   std::optional<cv::Point2f> since_whole;
+  /// How far it moved since its keypoints at the frame's edge were extracted.
+  cv::Point2f since_edge;
+  /// Whether what came into view of it since then is extracted in this frame.
+  bool renew = false;
 };
 
 /// ECC over the instance's own pixels (its outline, the belt under it left out) must agree this
@@ -127,6 +131,9 @@ constexpr double kMostChanged = 0.5;
 constexpr double kOutlineSlack = 4.0;
 /// An instance is followed by its motion while this share of its box is in the frame.
 constexpr double kLeastInFrame = 0.3;
+/// An instance coming into view across the frame's edge has what came into view extracted
+/// (and its keypoints whose windows the edge cut) once this share more of its box is in view.
+constexpr double kMoreInView = 0.4;
 /// The moved instances move together (a belt) when each one's step lies within this share of
 /// their median step (or kBeltAgreePx, whichever is more) of it.
 constexpr double kBeltAgreeShare = 0.15;
@@ -202,6 +209,15 @@ bool step_shift(const cv::Mat& last, const cv::Mat& grey, const Instance& instan
                    kSearchMargin, shift);
 }
 
+/// Whether a point of an object that moved by `moved` since its keypoints were extracted lay
+/// there within `r` pixels of the frame's edge it came in across (or beyond it).
+bool came_across_edge(const cv::Point2f& p, const cv::Point2f& moved, double r,
+                      const cv::Size& frame) {
+  const cv::Point2f then = p - moved;
+  return (moved.x > 0 && then.x < r) || (moved.x < 0 && then.x > frame.width - r) ||
+         (moved.y > 0 && then.y < r) || (moved.y < 0 && then.y > frame.height - r);
+}
+
 /// The block (row, column) a point lies in, on a grid of `blocks`.
 cv::Point block_of(const cv::Point2f& p, const cv::Mat& blocks) {
   return {std::clamp(static_cast<int>(p.x) / kBlock, 0, blocks.cols - 1),
@@ -262,7 +278,7 @@ Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& gr
   reference_ = block_means(grey);
   grey.copyTo(last_grey_);
   grey.copyTo(whole_grey_);
-  motions_.assign(detection_.instances.size(), Motion{std::nullopt, cv::Point2f()});
+  motions_.assign(detection_.instances.size(), Motion{std::nullopt, cv::Point2f(), cv::Point2f()});
   since_whole_ = 0;
   last_ = ReuseStats{static_cast<int>(features_.keypoints.size()), 0, 1.0, true, false};
   return detection_;
@@ -345,7 +361,14 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       }
       // What was in view moved to `after`; what comes into view beside it is extracted.
       const cv::Rect after = (before + cv::Point(cvRound(shift.x), cvRound(shift.y))) & frame;
-      follow[n] = Moved{&instance, shift, before, after, since_whole};
+      // Coming into view across the frame's edge: once a good share more of it is in view than
+      // when its keypoints there were extracted, what came in is extracted.
+      const cv::Point2f edge = motion.since_edge + shift;
+      const cv::Rect whole =
+          box_of(instance.outline) + cv::Point(cvRound(shift.x), cvRound(shift.y));
+      const cv::Rect then = (whole - cv::Point(cvRound(edge.x), cvRound(edge.y))) & frame;
+      const bool renew = (whole & frame).area() - then.area() >= kMoreInView * whole.area();
+      follow[n] = Moved{&instance, shift, before, after, since_whole, edge, renew};
     }
   });
   for (const std::optional<Moved>& m : follow)
@@ -354,7 +377,22 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       explained(block_box(m->before)).setTo(255);
       explained(block_box(m->after)).setTo(255);
     }
-  const cv::Mat unexplained = changed & (explained == 0);
+  // What came into view of an entering instance, and its keypoints the edge cut: extracted.
+  cv::Mat renewed = cv::Mat::zeros(changed.size(), CV_8UC1);
+  for (const Moved& m : moved) {
+    if (!m.renew)
+      continue;
+    const cv::Rect area = block_box(m.after);
+    for (int y = area.y; y < area.br().y; ++y)
+      for (int x = area.x; x < area.br().x; ++x) {
+        const cv::Point2f c((static_cast<float>(x) + 0.5f) * kBlock,
+                            (static_cast<float>(y) + 0.5f) * kBlock);
+        if (inside_outline(*m.instance, c - m.shift) &&
+            came_across_edge(c, m.since_edge, kCropReach, grey.size()))
+          renewed.at<uchar>(y, x) = 255;
+      }
+  }
+  const cv::Mat unexplained = (changed & (explained == 0)) | renewed;
   std::vector<std::pair<const Instance*, cv::Point2f>> shifts;
   for (const Moved& m : moved)
     shifts.emplace_back(m.instance, m.shift);
@@ -371,9 +409,17 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   auto in_explained = [&](const cv::KeyPoint& k) {
     return explained.at<uchar>(block_of(k.pt, explained)) != 0;
   };
-  auto carried = [&](const cv::Point2f& p) { // A moved instance's keypoints lie there now.
+  // A moved instance's keypoint of that size lies there now (not one the edge cut and that is
+  // extracted again).
+  // Whether `m` carries a keypoint like `k` that lay at `from` in the last frame, one the edge
+  // did not cut while `m` came into view (those are extracted again).
+  auto carries = [&](const Moved& m, const cv::KeyPoint& k, const cv::Point2f& from) {
+    return inside_outline(*m.instance, from) &&
+           !(m.renew && came_across_edge(from + m.shift, m.since_edge, reach(k), grey.size()));
+  };
+  auto carried = [&](const cv::KeyPoint& k) {
     return std::any_of(moved.begin(), moved.end(), [&](const Moved& m) {
-      return frame.contains(p - m.shift) && inside_outline(*m.instance, p - m.shift);
+      return frame.contains(k.pt - m.shift) && carries(m, k, k.pt - m.shift);
     });
   };
 
@@ -387,9 +433,13 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       return inside_outline(*m.instance, k.pt);
     });
     if (carrier != moved.end()) {
+      const cv::Point2f from = k.pt;
       k.pt += carrier->shift;
       if (!frame.contains(k.pt))
         continue; // Carried out of view.
+      if (std::none_of(moved.begin(), moved.end(),
+                       [&](const Moved& m) { return carries(m, k, from); }))
+        continue; // Its window was cut by the frame's edge: extracted again below.
     } else if (affected(k) || in_explained(k))
       continue; // Uncovered, covered or changed: what lies there now is extracted below.
     index[i] = static_cast<int>(merged.keypoints.size());
@@ -416,7 +466,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
     for (size_t i = 0; i < f.keypoints.size(); ++i) {
       cv::KeyPoint k = f.keypoints[i];
       k.pt += cv::Point2f(static_cast<float>(crop.x), static_cast<float>(crop.y));
-      if (affected(k) && supported_in(k, crop, grey.size()) && !carried(k.pt)) {
+      if (affected(k) && supported_in(k, crop, grey.size()) && !carried(k)) {
         fresh.keypoints.push_back(k);
         fresh.descriptors.push_back(f.descriptors.row(static_cast<int>(i)));
       }
@@ -464,7 +514,9 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
                        cv::Point2f(),
                        {},
                        {},
-                       still[n] ? last_motions[n].since_whole : std::nullopt});
+                       still[n] ? last_motions[n].since_whole : std::nullopt,
+                       still[n] ? last_motions[n].since_edge : cv::Point2f(),
+                       false});
   motions_.assign(detection_.instances.size(), Motion{});
   for (size_t n = 0; n < detection_.instances.size(); ++n) {
     const Instance& now = detection_.instances[n];
@@ -474,7 +526,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       const double d = cv::norm(m.instance->center + m.shift - now.center);
       if (m.instance->model == now.model && d < nearest) {
         nearest = d;
-        motions_[n] = Motion{m.shift, m.since_whole};
+        motions_[n] = Motion{m.shift, m.since_whole, m.renew ? cv::Point2f() : m.since_edge};
       }
     }
   }

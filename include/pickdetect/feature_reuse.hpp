@@ -37,6 +37,9 @@ struct ReuseStats {
 /// whole frame and the crops. Around the changed blocks nothing explains (objects coming into view,
 /// taken away, turned), SIFT runs on crops wide enough that the keypoints it gives there are those
 /// of the whole frame, and every keypoint whose descriptor reaches into such a block is replaced.
+/// An instance coming into view across the frame's edge rides in with the keypoints it had;
+/// each time 0.4 more of its box is in view than when they were extracted, what came into view
+/// since, and its keypoints whose windows the edge cut, are extracted again.
 /// The matching runs on the new keypoints only; voting, poses, look-alikes and occlusion run on all
 /// of them, on the frame's pixels. A frame in which nothing changed gets the last detection.
 /// Every `whole_interval`-th frame, a frame of another size, contrast threshold, detector or
@@ -87,6 +90,8 @@ private:
   struct Motion {
     std::optional<cv::Point2f> step;
     std::optional<cv::Point2f> since_whole;
+    /// How far it moved since its keypoints at the frame's edge were last extracted.
+    cv::Point2f since_edge;
   };
   std::vector<Motion> motions_;
   /// The belt's motion in the last frame (frame pixels), when the instances that moved there

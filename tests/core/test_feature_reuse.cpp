@@ -213,3 +213,42 @@ TEST(FeatureReuse, BoxEnteringFromTheEdgeIsFollowedFromWhereItWasFoundAgain) {
     }
   }
 }
+
+TEST(FeatureReuse, BoxComingIntoViewIsExtractedAsItComesIn) {
+  // A box rides in across the left edge, 12 px a frame, and is found with a third of it in view.
+  // While it comes in, what came into view since its keypoints there were extracted (and those
+  // whose windows the edge cut) must be extracted each time kMoreInView (0.4) more of it is in
+  // view, so that once it is wholly in view it rests on most of the matches the whole frame
+  // gives (415 of 557: its last 40 % waits for the next whole frame), and lies where the whole
+  // frame puts it (before: the keypoints of its first third alone, 158 matches, till the next
+  // whole frame).
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(60);
+  const Pose still{{700.f, 250.f}, 100.0, 0.55};
+  int whole_frames = 0;
+  for (int frame = 0; frame < 26; ++frame) {
+    const Pose riding{{-60.f + 12.f * frame, 480.f}, 0.0, 1.2};
+    const cv::Mat grey = scene_with({riding, still}, frame + 1);
+    const Detection got = reuse.detect(detector, grey, Settings());
+    whole_frames += reuse.last().whole ? 1 : 0;
+    if (frame < 22)
+      continue; // Wholly in view from frame 22 on (the box is 389 px wide at this scale).
+    const Detection want = detector.detect(grey, Settings());
+    auto nearest = [&](const Detection& d) {
+      return std::min_element(
+          d.instances.begin(), d.instances.end(), [&](const Instance& a, const Instance& b) {
+            return cv::norm(a.center - riding.center) < cv::norm(b.center - riding.center);
+          });
+    };
+    const auto w = nearest(want), g = nearest(got);
+    ASSERT_NE(w, want.instances.end()) << "frame " << frame;
+    ASSERT_NE(g, got.instances.end()) << "frame " << frame;
+    ASSERT_LE(cv::norm(w->center - riding.center), 2.0) << "frame " << frame;
+    EXPECT_LE(cv::norm(g->center - w->center), 0.3)
+        << "frame " << frame << ": the whole frame finds the box at (" << w->center.x << ", "
+        << w->center.y << "), reuse at (" << g->center.x << ", " << g->center.y << ")";
+    EXPECT_GE(g->matches, 0.6 * w->matches)
+        << "frame " << frame << ": " << g->matches << " matches, the whole frame " << w->matches;
+  }
+  EXPECT_EQ(whole_frames, 1); // The first: every other frame reused the ones before.
+}
