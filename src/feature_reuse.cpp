@@ -331,7 +331,8 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
     for (int i = range.start; i < range.end; ++i) {
       const size_t n = static_cast<size_t>(i);
       const Instance& instance = detection_.instances[n];
-      const cv::Rect before = box_of(instance.outline) & frame;
+      const cv::Rect box = box_of(instance.outline);
+      const cv::Rect before = box & frame;
       if (cv::countNonZero(changed(block_box(before))) == 0) {
         still[n] = 1;
         continue; // Still: its keypoints stay as they are.
@@ -364,8 +365,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       // Coming into view across the frame's edge: once a good share more of it is in view than
       // when its keypoints there were extracted, what came in is extracted.
       const cv::Point2f edge = motion.since_edge + shift;
-      const cv::Rect whole =
-          box_of(instance.outline) + cv::Point(cvRound(shift.x), cvRound(shift.y));
+      const cv::Rect whole = box + cv::Point(cvRound(shift.x), cvRound(shift.y));
       const cv::Rect then = (whole - cv::Point(cvRound(edge.x), cvRound(edge.y))) & frame;
       const bool renew = (whole & frame).area() - then.area() >= kMoreInView * whole.area();
       follow[n] = Moved{&instance, shift, before, after, since_whole, edge, renew};
@@ -409,14 +409,14 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   auto in_explained = [&](const cv::KeyPoint& k) {
     return explained.at<uchar>(block_of(k.pt, explained)) != 0;
   };
-  // A moved instance's keypoint of that size lies there now (not one the edge cut and that is
-  // extracted again).
   // Whether `m` carries a keypoint like `k` that lay at `from` in the last frame, one the edge
   // did not cut while `m` came into view (those are extracted again).
   auto carries = [&](const Moved& m, const cv::KeyPoint& k, const cv::Point2f& from) {
     return inside_outline(*m.instance, from) &&
            !(m.renew && came_across_edge(from + m.shift, m.since_edge, reach(k), grey.size()));
   };
+  // A moved instance's keypoint of that size lies there now (not one the edge cut and that is
+  // extracted again).
   auto carried = [&](const cv::KeyPoint& k) {
     return std::any_of(moved.begin(), moved.end(), [&](const Moved& m) {
       return frame.contains(k.pt - m.shift) && carries(m, k, k.pt - m.shift);
