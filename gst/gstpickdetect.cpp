@@ -1034,7 +1034,9 @@ static void gst_pick_detect_class_init(GstPickDetectClass* klass) {
       gobject_class, PROP_TRACK_TIMEOUT,
       g_param_spec_uint("track-timeout", "Track timeout",
                         "Milliseconds a tracked object may go unseen (hidden, missed) and keep its "
-                        "id when it shows again where its motion says; then its track ends",
+                        "id when it shows again where its motion says; then its track ends. "
+                        "Till then one riding hidden under a neighbour that moves with it is "
+                        "still reported (tracked, at its predicted pose)",
                         0, 600000, DEFAULT_TRACK_TIMEOUT, flags));
   g_object_class_install_property(
       gobject_class, PROP_COUNT_LINE,

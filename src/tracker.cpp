@@ -46,24 +46,46 @@ Instance moved(const Instance& instance, cv::Point2d by) {
   return out;
 }
 
-/// Intersection over union of the convex hulls of two outlines (0 without outlines).
-double hull_iou(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
+/// The areas of the convex hulls of two outlines and of their intersection (all 0 when either
+/// has no area).
+struct HullAreas {
+  double a = 0.0, b = 0.0, both = 0.0;
+};
+
+HullAreas hull_areas(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
   if (a.size() < 3 || b.size() < 3)
-    return 0.0;
+    return {};
   std::vector<cv::Point2f> ha, hb, inter;
   cv::convexHull(a, ha);
   cv::convexHull(b, hb);
   const double area_a = cv::contourArea(ha), area_b = cv::contourArea(hb);
   if (area_a <= 0.0 || area_b <= 0.0)
-    return 0.0;
-  const double i = std::max(0.0, static_cast<double>(cv::intersectConvexConvex(ha, hb, inter)));
-  return i / (area_a + area_b - i);
+    return {};
+  return {area_a, area_b,
+          std::max(0.0, static_cast<double>(cv::intersectConvexConvex(ha, hb, inter)))};
+}
+
+/// Intersection over union of the convex hulls of two outlines (0 without outlines).
+double hull_iou(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
+  const HullAreas h = hull_areas(a, b);
+  return h.both > 0.0 ? h.both / (h.a + h.b - h.both) : 0.0;
+}
+
+/// The share of `a`'s convex hull that `b`'s covers (0 without outlines).
+double hull_covered_share(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
+  const HullAreas h = hull_areas(a, b);
+  return h.both > 0.0 ? h.both / h.a : 0.0;
 }
 
 /// Smallest difference between two angles in degrees, in [0, 180].
 double angle_difference(double a, double b) {
   double d = std::fmod(std::abs(a - b), 360.0);
   return d > 180.0 ? 360.0 - d : d;
+}
+
+/// How far a velocity may be from `v` and still move together with it (px/s).
+double together_tolerance(const TrackerSettings& s, cv::Point2d v) {
+  return std::max(s.common_motion_slack, s.common_motion_tolerance * cv::norm(v));
 }
 
 bool inside(cv::Point2d p, cv::Size frame) {
@@ -129,6 +151,12 @@ cv::Point2d Tracker::predicted_offset(const Track& track, std::int64_t time_ns) 
   if (motion_.found)
     return motion_.velocity * dt;
   return {0.0, 0.0};
+}
+
+bool Tracker::moves_with(const Track& a, const Track& b) const {
+  if (!a.has_velocity || !b.has_velocity)
+    return false;
+  return cv::norm(a.velocity - b.velocity) <= together_tolerance(settings_, b.velocity);
 }
 
 TrackEnd Tracker::end_reason(const Track& track, cv::Point2d predicted, cv::Size frame) const {
@@ -301,8 +329,7 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
   CommonMotion motion;
   if (static_cast<int>(velocities.size()) >= settings_.common_motion_min_tracks) {
     const cv::Point2d m(detail::median(vx), detail::median(vy));
-    const double tolerance =
-        std::max(settings_.common_motion_slack, settings_.common_motion_tolerance * cv::norm(m));
+    const double tolerance = together_tolerance(settings_, m);
     cv::Point2d sum;
     int n = 0;
     for (const cv::Point2d& v : velocities) {
@@ -357,16 +384,27 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
       ends.push_back(ended(track, end_reason(track, predicted, frame)));
       continue;
     }
-    // Carried forward while time goes on, unless a detection (of any model) now lies where
-    // it is predicted: that one replaces it.
-    bool replaced = false;
+    // Carried forward while time goes on, unless a new detection (of any model) now lies
+    // where it is predicted: that one replaces it. A neighbour tracked beside it since it was
+    // last seen replaces nothing; when it moves with it and covers enough of where it is
+    // predicted, this one rides hidden under it and is carried till the timeout.
+    bool replaced = false, under_cover = false;
     const std::vector<cv::Point2f> predicted_outline = shifted(track.last.outline, offset);
-    for (const Instance& det : detected)
-      replaced = replaced || hull_iou(predicted_outline, det.outline) > 0.3;
+    for (size_t d = 0; d < detected.size(); d++) {
+      const int u = track_of[d];
+      if (u < 0 || tracks_[static_cast<size_t>(u)].first_seen_ns > track.last_seen_ns) {
+        replaced = replaced || hull_iou(predicted_outline, detected[d].outline) > 0.3;
+        continue;
+      }
+      under_cover = under_cover || (moves_with(tracks_[static_cast<size_t>(u)], track) &&
+                                    hull_covered_share(predicted_outline, detected[d].outline) >=
+                                        settings_.carry_under_cover_share);
+    }
     const bool moving =
         track.has_velocity &&
         cv::norm(track.velocity) >= settings_.carry_forward_min_speed * object_size(track.last);
-    if (unseen_ms > 0.0 && unseen_ms <= settings_.carry_forward_ms && !replaced && moving) {
+    if (unseen_ms > 0.0 && (unseen_ms <= settings_.carry_forward_ms || under_cover) && !replaced &&
+        moving) {
       TrackedInstance ti;
       ti.instance = moved(track.last, offset);
       ti.instance.pickable = false;

@@ -27,6 +27,10 @@ struct TrackerSettings {
   /// one frame's detection is where its motion says; a still one that is not seen any more was
   /// most likely taken away (a pick from a bin), and is not reported.
   double carry_forward_min_speed = 0.5;
+  /// ...and until the timeout while it rides under another: an instance tracked beside it since
+  /// it was last seen, moving with it (see `common_motion_tolerance`), covers at least this
+  /// share of where it is predicted (its hull's area). Such a neighbour does not replace it.
+  double carry_under_cover_share = 0.25;
   /// A detection may continue a track when its centre lies within this distance of the track's
   /// predicted centre, in object sizes (square root of the outline's area). Grows by
   /// `gate_growth` per frame the track went unseen, up to `max_gate`.
@@ -157,6 +161,8 @@ private:
   };
 
   cv::Point2d predicted_offset(const Track& track, std::int64_t time_ns) const;
+  /// Whether two tracks move together (common_motion_tolerance, of `b`'s speed).
+  bool moves_with(const Track& a, const Track& b) const;
   TrackEvent ended(const Track& track, TrackEnd reason) const;
   TrackEnd end_reason(const Track& track, cv::Point2d predicted, cv::Size frame) const;
   void update_count(Track& track, std::vector<CountEvent>& counts);
