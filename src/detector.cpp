@@ -3,6 +3,7 @@
 #include <pickdetect/detector.hpp>
 
 #include "colour_decision.hpp"
+#include "guided_matching.hpp"
 #include "look_alikes.hpp"
 #include "model_scene.hpp"
 #include "repeat_placement.hpp"
@@ -64,11 +65,16 @@ void check_frames(const cv::Mat& grey, const cv::Mat& colour) {
 std::vector<Instance> find_instances(const Model& model, int m, const Features& scene,
                                      const std::vector<Match>& matches, const Settings& s) {
   detail::ModelScene ms{
-      model, model.features(s.features).keypoints, m, scene.keypoints, {}, {}, 0.0, {}};
+      model, model.features(s.features).keypoints, m,      scene.keypoints, {}, {}, 0.0,
+      {},    &model.features(s.features),          &scene, s.features};
   for (const Match& match : matches)
     if (match.model == m)
       ms.matches.push_back(match);
-  if (static_cast<int>(ms.matches.size()) < std::max(1, s.min_matches))
+  // Voting completes hypotheses of fewer votes for a model of faint print (guided matching).
+  const bool guided = s.method == Method::Voting && s.refine && model.faint_print();
+  const size_t fewest =
+      guided ? detail::kMinGuidedVotes : static_cast<size_t>(std::max(1, s.min_matches));
+  if (ms.matches.size() < fewest)
     return {};
   detail::index_matches(ms);
   ms.votes = cast_votes(ms.matches, ms.model_keypoints, scene.keypoints, ms.model.principal_points,
@@ -159,9 +165,7 @@ Detector::Detector(std::vector<Model> models) : models_(std::move(models)) {
       throw Error("model '" + m.name +
                   "' is incomplete (no features, principal points or outline)");
   // A model found at a lowered threshold has faint print (compute_model_features).
-  if (std::any_of(models_.begin(), models_.end(), [](const Model& m) {
-        return m.contrast_threshold < kSiftContrastThreshold * (1.0 - 1e-9);
-      }))
+  if (std::any_of(models_.begin(), models_.end(), [](const Model& m) { return m.faint_print(); }))
     print_share_ = kFaintPrintFrameShare;
   matchers_ = std::make_shared<const Matchers>(
       Matchers{Matcher(models_, FeatureKind::Sift), Matcher(models_, FeatureKind::Orb)});

@@ -28,6 +28,10 @@ struct ModelScene {
   /// The matches' scene positions on a grid (see index_matches): match_grid.inside(box)
   /// gives the matches whose scene keypoints lie in a box, in increasing order.
   PointGrid match_grid;
+  /// The model's and the frame's features (descriptors included), for guided matching.
+  const Features* model_features = nullptr;
+  const Features* scene = nullptr;
+  FeatureKind kind = FeatureKind::Sift;
 };
 
 /// Fills the match grid of `ms` from its matches (cells of half the model's smaller side).
@@ -60,6 +64,22 @@ std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bo
 /// Refinement (refine.cpp): how far, in scene pixels, an inlier's scene keypoint may lie from
 /// where a pose of the given scale puts its model keypoint.
 double inlier_distance(const ModelScene& ms, double scale);
+/// A pair of keypoints agrees with a pose (the refinement's inliers, guided matching) when its
+/// rotation lies within this many degrees of the pose's...
+constexpr double kInlierAngleDeg = 30.0;
+/// ...and its size ratio within this factor of the pose's scale.
+constexpr double kInlierScaleFactor = 1.5;
+/// Whether model keypoint `km` lies within `radius` model pixels of `at` (where a pose carries
+/// scene keypoint `ks` back into the model) with the rotation and size the pose (`angle`,
+/// `scale`) predicts there, within kInlierAngleDeg and kInlierScaleFactor.
+bool placed_alike(const cv::KeyPoint& ks, const cv::KeyPoint& km, cv::Point2d at, double radius,
+                  double angle, double scale);
+/// A face seen up to about 70 degrees off its normal: the smaller scale of a map's linear part
+/// is at least this share of the larger.
+constexpr double kMaxForeshortening = 0.35;
+/// Whether the linear part of `map` (an affine map, or a homography near its origin) shows a
+/// face from its front side (no mirror), foreshortened at most kMaxForeshortening.
+bool front_view(const cv::Matx33d& map);
 /// Refits a similarity pose on its own inlier matches (those not yet
 /// `claimed` by a stronger instance) until they settle; returns the inliers.
 std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,

@@ -19,10 +19,8 @@ namespace {
 /// the model's smaller side (at least kMinInlierPx) of where the pose puts its model keypoint...
 constexpr double kInlierShare = 0.02;
 constexpr double kMinInlierPx = 3.0;
-/// ...its orientation agrees with the pose's within this many degrees...
-constexpr double kInlierAngleDeg = 30.0;
-/// ...and, with allow_scale, its size ratio lies within this factor of the pose's scale.
-constexpr double kInlierScaleFactor = 1.5;
+/// ...its orientation agrees with the pose's within kInlierAngleDeg and, with allow_scale, its
+/// size ratio lies within kInlierScaleFactor of the pose's scale (model_scene.hpp).
 constexpr int kRefineRounds = 4;
 /// Perspective refinement (objects tilted a little out of the picture plane): a homography is
 /// fitted on an instance's inliers when there are this many...
@@ -38,10 +36,8 @@ constexpr double kMaxPerspectiveShift = 0.15;
 /// map (RANSAC) over the hypothesis' votes and the matches on its outline grown by this factor,
 /// when they are at least kMinForeshortenedMatches (model_scene.hpp)...
 constexpr double kForeshortenedReach = 1.5;
-/// ...kept when its axes' scales differ by no more than this factor (a face seen up to about
-/// 70 degrees off its normal) and it gathers at least kForeshortenedGain times the
-/// similarity's inliers.
-constexpr double kMaxForeshortening = 0.35;
+/// ...kept when it shows the face from its front (front_view, model_scene.hpp) and it gathers
+/// at least kForeshortenedGain times the similarity's inliers.
 constexpr double kForeshortenedGain = 1.2;
 /// The affine map's RANSAC draws at most this many samples (it stops sooner once it is 99.5 %
 /// sure): where a fifth of the pool are its inliers, it finds them 98 times in 100 (the faces it
@@ -102,6 +98,24 @@ std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, const 
 }
 
 } // namespace
+
+bool placed_alike(const cv::KeyPoint& ks, const cv::KeyPoint& km, cv::Point2d at, double radius,
+                  double angle, double scale) {
+  const cv::Point2d d(km.pt.x - at.x, km.pt.y - at.y);
+  if (d.dot(d) > radius * radius || angle_difference(ks.angle - km.angle, angle) > kInlierAngleDeg)
+    return false;
+  const double ratio = km.size > 0.f ? ks.size / km.size / scale : 1.0;
+  return ratio <= kInlierScaleFactor && ratio >= 1.0 / kInlierScaleFactor;
+}
+
+bool front_view(const cv::Matx33d& map) {
+  const double det = map(0, 0) * map(1, 1) - map(0, 1) * map(1, 0);
+  if (!(det > 0.0))
+    return false;
+  cv::Mat sv;
+  cv::SVD::compute(cv::Mat(cv::Matx22d(map(0, 0), map(0, 1), map(1, 0), map(1, 1))), sv);
+  return sv.at<double>(1) >= kMaxForeshortening * sv.at<double>(0);
+}
 
 double inlier_distance(const ModelScene& ms, double scale) {
   return std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * scale);
@@ -227,13 +241,7 @@ bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool all
     return false;
   cv::Matx33d map(a.at<double>(0, 0), a.at<double>(0, 1), a.at<double>(0, 2), a.at<double>(1, 0),
                   a.at<double>(1, 1), a.at<double>(1, 2), 0, 0, 1);
-  // A face seen from its front side (no mirror), foreshortened at most kMaxForeshortening.
-  const double det = map(0, 0) * map(1, 1) - map(0, 1) * map(1, 0);
-  if (!(det > 0.0))
-    return false;
-  cv::Mat sv;
-  cv::SVD::compute(cv::Mat(cv::Matx22d(map(0, 0), map(0, 1), map(1, 0), map(1, 1))), sv);
-  if (sv.at<double>(1) < kMaxForeshortening * sv.at<double>(0))
+  if (!front_view(map))
     return false;
   // Beside a similarity that holds, the matches must agree with its rotation and scale; where
   // none held (fewer than kMinForeshortenedMatches asked for: the similarity kept too few

@@ -2,15 +2,16 @@
 // Scene-level verification: the instances of all models compete for the frame's keypoints.
 #include "scene_explanation.hpp"
 
+#include "descriptor_distance.hpp"
 #include "foreign_cover.hpp"
 #include "model_scene.hpp"
 #include "point_grid.hpp"
 #include "polygon.hpp"
 
+#include <pickdetect/occlusion.hpp>
 #include <pickdetect/pose.hpp>
 
 #include <opencv2/core.hpp>
-#include <opencv2/core/hal/hal.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -25,15 +26,9 @@ namespace {
 /// the scene keypoint back into the model...
 constexpr double kPlaceShare = 0.02;
 constexpr double kMinPlacePx = 3.0;
-/// ...with the rotation and size ratio the pose predicts there (as for the refinement's
-/// inliers)...
-constexpr double kAngleDeg = 30.0;
-constexpr double kScaleFactor = 1.5;
-/// ...and a descriptor within this distance of the scene keypoint's: L2 for SIFT, whose
-/// descriptors OpenCV scales to a norm of 512 (on the real tote, 300-400 explained the same
-/// keypoints, 250 lost blurred true ones), Hamming for ORB's 256 bits.
-constexpr double kAgreeSiftDistance = 300.0;
-constexpr double kAgreeOrbDistance = 64.0;
+/// ...with the rotation and size ratio the pose predicts there (kInlierAngleDeg and
+/// kInlierScaleFactor, as for the refinement's inliers) and a descriptor within
+/// agree_distance() of the scene keypoint's (descriptor_distance.hpp).
 /// An instance is kept when nearly all the keypoints it explains are its own: a few may lie on
 /// an edge it shares with a neighbour.
 constexpr double kOwnShare = 0.9;
@@ -74,28 +69,21 @@ constexpr int kMinToldCells = 8;
 /// millisecond an instance, and kept instances are compared where they overlap it); one that
 /// explains more has shown its print keypoint by keypoint. The ghosts above explained 11-32.
 constexpr size_t kPixelCheckBelow = 64;
+/// An instance that guided matching completed (voting.cpp) rests on descriptors that agree
+/// with a model only where its pose puts them, no ratio test: where more than this share of
+/// its outline lies on an instance already kept, its pairs are that instance's print read as
+/// this model's (on the real tote, a soap face's pose built on a toothpaste carton's white
+/// label).
+constexpr double kMaxGuidedOverlap = 0.2;
 
-/// Whether descriptor row `a` of `as` lies within `limit` of row `b` of `bs`: L2 for SIFT's
-/// floats, stopping as soon as the sum passes the limit (most pairs differ early); Hamming for
-/// ORB's bits.
-bool close_descriptors(const cv::Mat& as, int a, const cv::Mat& bs, int b, double limit,
-                       FeatureKind kind) {
-  if (kind == FeatureKind::Orb)
-    return cv::hal::normHamming(as.ptr<uchar>(a), bs.ptr<uchar>(b), as.cols) <= limit;
-  const float* x = as.ptr<float>(a);
-  const float* y = bs.ptr<float>(b);
-  const double bound = limit * limit;
-  double sum = 0.0;
-  for (int i = 0; i < as.cols; i += 16) {
-    const int end = std::min(as.cols, i + 16);
-    for (int j = i; j < end; ++j) {
-      const double d = static_cast<double>(x[j]) - y[j];
-      sum += d * d;
-    }
-    if (sum > bound)
-      return false;
-  }
-  return true;
+/// Whether instance `i`'s outline lies more than kMaxGuidedOverlap on an instance kept so far.
+bool lies_on_kept(const std::vector<Instance>& instances, const std::vector<char>& keep, size_t i) {
+  const double area = std::abs(cv::contourArea(instances[i].outline));
+  for (size_t j = 0; j < instances.size(); ++j)
+    if (keep[j] &&
+        overlap_area(instances[i].outline, instances[j].outline) > kMaxGuidedOverlap * area)
+      return true;
+  return false;
 }
 
 /// The scene keypoints (indices) that instance `inst` of `model` explains.
@@ -109,7 +97,7 @@ std::vector<int> explained(const Instance& inst, const cv::Rect2f& model_box,
   if (!cv::invert(inst.homography, back, cv::DECOMP_LU))
     return out;
   const cv::Rect2f box = bounds(inst.outline);
-  const double limit = kind == FeatureKind::Orb ? kAgreeOrbDistance : kAgreeSiftDistance;
+  const double limit = agree_distance(kind);
   for (int s : scene_grid.inside(box)) {
     const cv::KeyPoint& ks = scene.keypoints[s];
     const cv::Vec3d q = back * cv::Vec3d(ks.pt.x, ks.pt.y, 1.0);
@@ -124,16 +112,10 @@ std::vector<int> explained(const Instance& inst, const cv::Rect2f& model_box,
     model_grid.for_neighbours(at, [&](int k) {
       if (agrees) // One model keypoint that agrees is enough.
         return;
-      const cv::KeyPoint& km = model_features.keypoints[k];
-      const cv::Point2d d(km.pt.x - at.x, km.pt.y - at.y);
-      if (d.dot(d) > model_radius * model_radius)
+      if (!placed_alike(ks, model_features.keypoints[k], at, model_radius, inst.angle, inst.scale))
         return;
-      if (angle_difference(ks.angle - km.angle, inst.angle) > kAngleDeg)
-        return;
-      const double ratio = km.size > 0.f ? ks.size / km.size / inst.scale : 1.0;
-      if (ratio > kScaleFactor || ratio < 1.0 / kScaleFactor)
-        return;
-      agrees = close_descriptors(scene.descriptors, s, model_features.descriptors, k, limit, kind);
+      agrees =
+          distance_within(scene.descriptors, s, model_features.descriptors, k, limit, kind) >= 0.0;
     });
     if (agrees)
       out.push_back(s);
@@ -292,6 +274,8 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
       continue;
     if (!grey.empty() && explains[i].size() < kPixelCheckBelow &&
         !instance_shows_print(instances, i, keep, models, grey, shown))
+      continue;
+    if (instances[i].guided && lies_on_kept(instances, keep, i))
       continue;
     keep[i] = 1;
     for (int s : explains[i])

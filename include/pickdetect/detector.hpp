@@ -95,10 +95,14 @@ struct Instance {
   /// Another detected instance lies on it (or which is on top is unclear), or, when the frame's
   /// pixels were given, something of no model does (see occlusion.hpp).
   bool covered = false;
-  bool pickable = false;    ///< Not covered and enough of it seen (see occlusion.hpp).
+  bool pickable = false;    ///< Not covered, enough of it seen, not guided (occlusion.hpp).
   int pick_order = 0;       ///< 1 = pick first among the pickable instances; 0 = not pickable.
   cv::Point2f grasp;        ///< The model's grasp point in the scene.
   double grasp_angle = 0.0; ///< Gripper angle in degrees (the instance's angle).
+  /// Completed by guided matching from a hypothesis of two or three votes (a model of faint
+  /// print): its support pairs keypoints by descriptor where its pose puts them, not by the
+  /// ratio test. Never pickable: too little evidence to send a gripper to.
+  bool guided = false;
 };
 
 /// Time spent in each stage of one detection, in milliseconds.

@@ -55,6 +55,8 @@ struct Model {
   Features orb;  ///< ORB features of the picture (the fast configuration).
 
   const Features& features(FeatureKind kind) const { return kind == FeatureKind::Orb ? orb : sift; }
+  /// Whether the picture has faint print: its features were found below SIFT's usual threshold.
+  bool faint_print() const { return contrast_threshold < kSiftContrastThreshold * (1.0 - 1e-9); }
 };
 
 /// Fewest keypoints a model picture must yield to be usable.

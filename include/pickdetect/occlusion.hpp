@@ -49,10 +49,10 @@ void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<M
 /// given, the frame shows something else than the model's picture over a connected patch of
 /// it: an object that is no instance lying on it),
 /// `visibility` (share of its outline inside the frame and under no instance on top of it),
-/// `pickable` (not covered, grasp point kGraspMarginPx inside the frame, visibility at least
-/// kMinPickableVisibility) and `pick_order` (1 = first, by score, among the pickable).
-/// `models` are indexed by Instance::model; `grey`, the frame, is optional; `kind` names the
-/// features the instances were found with.
+/// `pickable` (not covered, not `guided`, grasp point kGraspMarginPx inside the frame,
+/// visibility at least kMinPickableVisibility) and `pick_order` (1 = first, by score, among the
+/// pickable). `models` are indexed by Instance::model; `grey`, the frame, is optional; `kind` names
+/// the features the instances were found with.
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
                       const cv::Size& frame_size, const cv::Mat& grey = cv::Mat(),
                       FeatureKind kind = FeatureKind::Sift);

@@ -1,0 +1,146 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Guided matching: a face of faint print of which only two matches pass the ratio test (glare, a
+// steep tilt: the rest come out as near another part of the picture as their own) is completed
+// from the keypoints its pose predicts.
+#include "../support/box.hpp"
+
+#include <pickdetect/pickdetect.hpp>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+using namespace pickdetect;
+using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::faint_box_model;
+
+namespace {
+
+/// The face: turned 30 degrees, scaled by 0.7 and foreshortened to 0.8 of its height (a face
+/// tilted about 37 degrees off the picture plane), its centre at (320, 240).
+constexpr double kTurnDeg = 30.0, kScale = 0.7, kSqueeze = 0.8;
+const cv::Point2f kAt(320.f, 240.f);
+
+cv::Matx22d face_map() {
+  const double r = kTurnDeg * CV_PI / 180.0;
+  return cv::Matx22d(std::cos(r), -std::sin(r), std::sin(r), std::cos(r)) *
+         cv::Matx22d(kScale, 0.0, 0.0, kScale * kSqueeze);
+}
+
+/// Where the face puts model point `p`.
+cv::Point2f on_face(const Model& model, cv::Point2f p) {
+  const cv::Point2f c = model.principal_points[0];
+  const cv::Vec2d q = face_map() * cv::Vec2d(p.x - c.x, p.y - c.y);
+  return kAt + cv::Point2f(static_cast<float>(q[0]), static_cast<float>(q[1]));
+}
+
+/// The frame's keypoints: the strongest of the picture's own keypoints in each cell of a 4 x 3
+/// grid, placed on the face. The two nearest the middle row keep their own descriptors (they
+/// pass the ratio test); the others' descriptors lie halfway between their own and that of the
+/// nearest model keypoint elsewhere on the picture, as far from one as from the other (the
+/// ratio test rejects them, as it rejects a washed-out carton's). With `only_exact` the others
+/// are left out.
+Features face_keypoints(const Model& model, bool only_exact) {
+  const size_t own =
+      extract_features(model.image, model.mask, FeatureKind::Sift, model.contrast_threshold)
+          .keypoints.size(); // the picture's own come first, then its tilted views'
+  const cv::Point2f c = model.principal_points[0];
+  std::vector<int> chosen;
+  for (int row = 0; row < 3; ++row)
+    for (int column = 0; column < 4; ++column) {
+      const float x0 = model.image.cols * column / 4.f, x1 = model.image.cols * (column + 1) / 4.f;
+      const float y0 = model.image.rows * row / 3.f, y1 = model.image.rows * (row + 1) / 3.f;
+      int best = -1;
+      for (size_t i = 0; i < own; ++i) {
+        const cv::KeyPoint& k = model.sift.keypoints[i];
+        if (k.pt.x >= x0 && k.pt.x < x1 && k.pt.y >= y0 && k.pt.y < y1 &&
+            (best < 0 || k.response > model.sift.keypoints[static_cast<size_t>(best)].response))
+          best = static_cast<int>(i);
+      }
+      if (best >= 0)
+        chosen.push_back(best);
+    }
+  // The two nearest the middle row: their votes for the centre agree within 3 px.
+  std::vector<int> by_row = chosen;
+  std::sort(by_row.begin(), by_row.end(), [&](int a, int b) {
+    return std::abs(model.sift.keypoints[a].pt.y - c.y) <
+           std::abs(model.sift.keypoints[b].pt.y - c.y);
+  });
+  const std::vector<int> exact(by_row.begin(), by_row.begin() + 2);
+
+  Features scene;
+  for (int i : chosen) {
+    const bool is_exact = std::find(exact.begin(), exact.end(), i) != exact.end();
+    if (only_exact && !is_exact)
+      continue;
+    const cv::KeyPoint& km = model.sift.keypoints[static_cast<size_t>(i)];
+    cv::Mat descriptor = model.sift.descriptors.row(i).clone();
+    if (!is_exact) {
+      int rival = -1;
+      double nearest = 0.0;
+      for (int j = 0; j < model.sift.descriptors.rows; ++j) {
+        if (cv::norm(model.sift.keypoints[static_cast<size_t>(j)].pt - km.pt) < 30.0)
+          continue;
+        const double d = cv::norm(model.sift.descriptors.row(j), model.sift.descriptors.row(i));
+        if (rival < 0 || d < nearest) {
+          rival = j;
+          nearest = d;
+        }
+      }
+      descriptor = 0.5 * (descriptor + model.sift.descriptors.row(rival));
+    }
+    cv::KeyPoint ks = km;
+    ks.pt = on_face(model, km.pt);
+    ks.angle = std::fmod(km.angle + static_cast<float>(kTurnDeg), 360.f);
+    ks.size = km.size * static_cast<float>(kScale);
+    scene.keypoints.push_back(ks);
+    scene.descriptors.push_back(descriptor);
+  }
+  return scene;
+}
+
+} // namespace
+
+TEST(GuidedMatching, AFaintFaceOfTwoRatioTestMatchesIsCompleted) {
+  const Model model = faint_box_model();
+  ASSERT_LT(model.contrast_threshold, kSiftContrastThreshold) << "the premise: faint print";
+  const Features scene = face_keypoints(model, false);
+  ASSERT_EQ(scene.keypoints.size(), 12u);
+  const Detection d = Detector({model}).detect(scene, cv::Size(640, 480), Settings());
+  EXPECT_EQ(d.matches, 2) << "the premise: two matches pass the ratio test";
+  ASSERT_EQ(d.instances.size(), 1u) << "the face is found from its keypoints' descriptors";
+  const Instance& inst = d.instances[0];
+  EXPECT_EQ(inst.matches, 12) << "every keypoint of the face supports it";
+  EXPECT_TRUE(inst.guided);
+  EXPECT_FALSE(inst.pickable) << "a pose of a few pairs without the ratio test: uncertain, so "
+                                 "not pickable, though nothing lies on it";
+  for (size_t k = 0; k < model.principal_points.size(); ++k) {
+    const cv::Point2f truth = on_face(model, model.principal_points[k]);
+    EXPECT_LT(cv::norm(inst.points[k] - truth), 1.0)
+        << "principal point " << k << ": expected (" << truth.x << ", " << truth.y << "), got ("
+        << inst.points[k].x << ", " << inst.points[k].y << ")";
+  }
+}
+
+TEST(GuidedMatching, TwoMatchesAloneMakeNoInstance) {
+  const Model model = faint_box_model();
+  const Features scene = face_keypoints(model, true);
+  ASSERT_EQ(scene.keypoints.size(), 2u);
+  EXPECT_TRUE(Detector({model}).detect(scene, cv::Size(640, 480), Settings()).instances.empty())
+      << "nothing in the frame bears the two votes out";
+}
+
+TEST(GuidedMatching, ARichPrintModelKeepsTheRatioTestsWord) {
+  // The same face and keypoints, the model's features the same, but its picture not marked as
+  // of faint print: there the ratio test decides (in a frame of clutter, pairing descriptors
+  // near a pose built ghosts).
+  Model model = faint_box_model();
+  const Features scene = face_keypoints(model, false);
+  model.contrast_threshold = kSiftContrastThreshold;
+  ASSERT_FALSE(model.faint_print());
+  const Detection d = Detector({model}).detect(scene, cv::Size(640, 480), Settings());
+  EXPECT_EQ(d.matches, 2) << "the premise: two matches pass the ratio test";
+  EXPECT_TRUE(d.instances.empty());
+}
