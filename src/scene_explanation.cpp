@@ -255,8 +255,13 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
 
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return explains[a].size() > explains[b].size(); });
+  // Most explained first; the instances of guided matching, paired without the ratio test, only
+  // after every other: they take what those leave.
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    if (instances[a].guided != instances[b].guided)
+      return !instances[a].guided;
+    return explains[a].size() > explains[b].size();
+  });
   std::vector<int> taken(scene.keypoints.size(), 0);
   std::vector<char> keep(n, 0);
   ShownPrint shown;

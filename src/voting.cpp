@@ -297,7 +297,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
     }
     found.push_back(std::move(inst));
   }
-  if (!ms.model.faint_print() || weak.empty() || !s.refine || !s.allow_scale ||
+  if (!ms.model.faint_print() || (weak.empty() && found.empty()) || !s.refine || !s.allow_scale ||
       ms.scene == nullptr || ms.model_features == nullptr)
     return found;
   // A model of faint print (few keypoints, found at a lowered threshold: a white glossy carton)
@@ -306,31 +306,51 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
   // the frame's keypoints bear them out. Models of rich print keep the ratio test's word: in
   // their clutter (the dev sets) guided matching built ghosts of five to ten pairs.
   const GuidedMatcher guided(ms, *ms.model_features, *ms.scene, ms.kind);
-  for (const std::vector<int>* members : weak) {
-    Similarity pose;
-    if (!pose_from_principal_points(ms, *members, s.allow_scale, pose))
-      continue;
-    const cv::Point2f at = pose.apply(ms.model.principal_points[0]);
-    auto inside_found = [&](cv::Point2f p) {
-      return std::any_of(found.begin(), found.end(), [&](const Instance& other) {
-        return cv::pointPolygonTest(other.outline, p, false) >= 0;
-      });
-    };
-    if (inside_found(at))
-      continue;
+  auto inside_found = [&](cv::Point2f p) {
+    return std::any_of(found.begin(), found.end(), [&](const Instance& other) {
+      return cv::pointPolygonTest(other.outline, p, false) >= 0;
+    });
+  };
+  auto complete = [&](const Similarity& pose) {
+    if (inside_found(pose.apply(ms.model.principal_points[0])))
+      return;
     cv::Matx33d h;
     std::vector<cv::Point2f> support;
     if (!guided.complete(pose, h, support))
-      continue;
+      return;
     Instance inst;
     place(inst, ms.model, h);
     if (inside_found(inst.center))
-      continue;
+      return;
     inst.matches = static_cast<int>(support.size());
     inst.distinct_matches = inst.matches;
     inst.guided = true;
     inst.support = std::move(support);
     found.push_back(std::move(inst));
+  };
+  for (const std::vector<int>* members : weak) {
+    Similarity pose;
+    if (pose_from_principal_points(ms, *members, s.allow_scale, pose))
+      complete(pose);
+  }
+  // Faces packed in a row beside one found: its neighbours' places, a face along each axis of
+  // the picture, carried by its pose (a homography follows a foreshortened row).
+  const cv::Rect2f side = cv::boundingRect(ms.model.outline);
+  const cv::Point2f c = ms.model.principal_points[0];
+  const size_t first_found = found.size();
+  for (size_t f = 0; f < first_found; ++f) {
+    const Similarity turn{found[f].angle, found[f].scale, {}};
+    const cv::Matx33d h = found[f].homography;
+    for (const cv::Point2f step : {cv::Point2f(side.width, 0.f), cv::Point2f(-side.width, 0.f),
+                                   cv::Point2f(0.f, side.height), cv::Point2f(0.f, -side.height)}) {
+      const cv::Vec3d q = h * cv::Vec3d(c.x + step.x, c.y + step.y, 1.0);
+      if (!(q[2] > 0.0))
+        continue;
+      const cv::Point2f to =
+          cv::Point2f(static_cast<float>(q[0] / q[2]), static_cast<float>(q[1] / q[2])) -
+          turn.apply(c);
+      complete(Similarity{found[f].angle, found[f].scale, cv::Point2d(to.x, to.y)});
+    }
   }
   return found;
 }

@@ -7,6 +7,7 @@
 #include <pickdetect/pickdetect.hpp>
 
 #include <gtest/gtest.h>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -29,11 +30,11 @@ cv::Matx22d face_map() {
          cv::Matx22d(kScale, 0.0, 0.0, kScale * kSqueeze);
 }
 
-/// Where the face puts model point `p`.
-cv::Point2f on_face(const Model& model, cv::Point2f p) {
+/// Where the face centred at `at` puts model point `p`.
+cv::Point2f on_face(const Model& model, cv::Point2f p, cv::Point2f at = kAt) {
   const cv::Point2f c = model.principal_points[0];
   const cv::Vec2d q = face_map() * cv::Vec2d(p.x - c.x, p.y - c.y);
-  return kAt + cv::Point2f(static_cast<float>(q[0]), static_cast<float>(q[1]));
+  return at + cv::Point2f(static_cast<float>(q[0]), static_cast<float>(q[1]));
 }
 
 /// The frame's keypoints: the strongest of the picture's own keypoints in each cell of a 4 x 3
@@ -41,8 +42,9 @@ cv::Point2f on_face(const Model& model, cv::Point2f p) {
 /// pass the ratio test); the others' descriptors lie halfway between their own and that of the
 /// nearest model keypoint elsewhere on the picture, as far from one as from the other (the
 /// ratio test rejects them, as it rejects a washed-out carton's). With `only_exact` the others
-/// are left out.
-Features face_keypoints(const Model& model, bool only_exact) {
+/// are left out. `at`: the face's centre; `exact_count`: how many keep their own descriptors.
+Features face_keypoints(const Model& model, bool only_exact, cv::Point2f at = kAt,
+                        size_t exact_count = 2) {
   const size_t own =
       extract_features(model.image, model.mask, FeatureKind::Sift, model.contrast_threshold)
           .keypoints.size(); // the picture's own come first, then its tilted views'
@@ -68,7 +70,8 @@ Features face_keypoints(const Model& model, bool only_exact) {
     return std::abs(model.sift.keypoints[a].pt.y - c.y) <
            std::abs(model.sift.keypoints[b].pt.y - c.y);
   });
-  const std::vector<int> exact(by_row.begin(), by_row.begin() + 2);
+  const std::vector<int> exact(
+      by_row.begin(), by_row.begin() + static_cast<long>(std::min(exact_count, by_row.size())));
 
   Features scene;
   for (int i : chosen) {
@@ -92,7 +95,7 @@ Features face_keypoints(const Model& model, bool only_exact) {
       descriptor = 0.5 * (descriptor + model.sift.descriptors.row(rival));
     }
     cv::KeyPoint ks = km;
-    ks.pt = on_face(model, km.pt);
+    ks.pt = on_face(model, km.pt, at);
     ks.angle = std::fmod(km.angle + static_cast<float>(kTurnDeg), 360.f);
     ks.size = km.size * static_cast<float>(kScale);
     scene.keypoints.push_back(ks);
@@ -143,4 +146,27 @@ TEST(GuidedMatching, ARichPrintModelKeepsTheRatioTestsWord) {
   const Detection d = Detector({model}).detect(scene, cv::Size(640, 480), Settings());
   EXPECT_EQ(d.matches, 2) << "the premise: two matches pass the ratio test";
   EXPECT_TRUE(d.instances.empty());
+}
+
+TEST(GuidedMatching, AFaintFaceBesideOneFoundInAPackedRowIsCompleted) {
+  // Two faces side by side in a row, touching: the first has twelve keypoints that pass the
+  // ratio test, the second none (no vote starts a search there); its place is the first's
+  // shifted by one face along the row.
+  const Model model = faint_box_model();
+  const float width = static_cast<float>(cv::boundingRect(model.outline).width);
+  const cv::Vec2d step = face_map() * cv::Vec2d(width, 0.0);
+  const cv::Point2f next =
+      kAt + cv::Point2f(static_cast<float>(step[0]), static_cast<float>(step[1]));
+  Features scene = face_keypoints(model, false, kAt, 12);
+  const Features beside = face_keypoints(model, false, next, 0);
+  scene.keypoints.insert(scene.keypoints.end(), beside.keypoints.begin(), beside.keypoints.end());
+  cv::vconcat(scene.descriptors, beside.descriptors, scene.descriptors);
+  const Detection d = Detector({model}).detect(scene, cv::Size(1000, 800), Settings());
+  ASSERT_EQ(d.instances.size(), 2u) << "both faces of the row";
+  for (const cv::Point2f at : {kAt, next}) {
+    const auto it = std::find_if(d.instances.begin(), d.instances.end(),
+                                 [&](const Instance& i) { return cv::norm(i.center - at) < 1.0; });
+    ASSERT_NE(it, d.instances.end()) << "no face within 1 px of (" << at.x << ", " << at.y << ")";
+    EXPECT_EQ(it->guided, at == next) << "only the second needs guided matching";
+  }
 }
