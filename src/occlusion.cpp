@@ -142,6 +142,10 @@ double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Poi
   return std::max(0.0, static_cast<double>(cv::intersectConvexConvex(ha, hb, both, true)));
 }
 
+double hull_area(const std::vector<cv::Point2f>& outline) {
+  return area_of(hull_of(outline));
+}
+
 int which_on_top(const Instance& a, const Model& model_a, const Instance& b, const Model& model_b,
                  const cv::Mat& grey, FeatureKind kind) {
   const std::vector<cv::Point2f> region = shared_area(a, b);

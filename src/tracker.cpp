@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Tracking across frames: association by predicted pose, common motion, track ends, counting.
 #include <pickdetect/error.hpp>
+#include <pickdetect/occlusion.hpp>
 #include <pickdetect/tracker.hpp>
 
 #include "median.hpp"
@@ -46,35 +47,10 @@ Instance moved(const Instance& instance, cv::Point2d by) {
   return out;
 }
 
-/// The areas of the convex hulls of two outlines and of their intersection (all 0 when either
-/// has no area).
-struct HullAreas {
-  double a = 0.0, b = 0.0, both = 0.0;
-};
-
-HullAreas hull_areas(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
-  if (a.size() < 3 || b.size() < 3)
-    return {};
-  std::vector<cv::Point2f> ha, hb, inter;
-  cv::convexHull(a, ha);
-  cv::convexHull(b, hb);
-  const double area_a = cv::contourArea(ha), area_b = cv::contourArea(hb);
-  if (area_a <= 0.0 || area_b <= 0.0)
-    return {};
-  return {area_a, area_b,
-          std::max(0.0, static_cast<double>(cv::intersectConvexConvex(ha, hb, inter)))};
-}
-
-/// Intersection over union of the convex hulls of two outlines (0 without outlines).
-double hull_iou(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
-  const HullAreas h = hull_areas(a, b);
-  return h.both > 0.0 ? h.both / (h.a + h.b - h.both) : 0.0;
-}
-
-/// The share of `a`'s convex hull that `b`'s covers (0 without outlines).
-double hull_covered_share(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
-  const HullAreas h = hull_areas(a, b);
-  return h.both > 0.0 ? h.both / h.a : 0.0;
+/// Intersection over union of two outlines taken as convex, from the area they share and
+/// their own areas (0 when they share none).
+double hull_iou(double shared, double area_a, double area_b) {
+  return shared > 0.0 ? shared / (area_a + area_b - shared) : 0.0;
 }
 
 /// Smallest difference between two angles in degrees, in [0, 180].
@@ -250,6 +226,7 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
             : std::min(settings_.max_gate, settings_.gate + settings_.gate_growth * track.missed);
     const cv::Point2d last(track.last.center.x, track.last.center.y);
     const std::vector<cv::Point2f> predicted_outline = shifted(track.last.outline, offsets[t]);
+    const double predicted_area = hull_area(predicted_outline);
     for (size_t d = 0; d < detected.size(); d++) {
       const Instance& det = detected[d];
       if (det.model_name != track.last.model_name)
@@ -260,7 +237,9 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
                                        cv::norm(at - last) / size + settings_.last_pose_penalty);
       if (distance > gate)
         continue;
-      const double cost = distance + 0.3 * (1.0 - hull_iou(predicted_outline, det.outline)) +
+      const double cost = distance +
+                          0.3 * (1.0 - hull_iou(overlap_area(predicted_outline, det.outline),
+                                                predicted_area, hull_area(det.outline))) +
                           0.2 * angle_difference(det.angle, track.last.angle) / 90.0;
       pairs.emplace_back(cost, t, d);
     }
@@ -390,15 +369,19 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
     // predicted, this one rides hidden under it and is carried till the timeout.
     bool replaced = false, under_cover = false;
     const std::vector<cv::Point2f> predicted_outline = shifted(track.last.outline, offset);
+    const double predicted_area = hull_area(predicted_outline);
     for (size_t d = 0; d < detected.size(); d++) {
+      const double shared = overlap_area(predicted_outline, detected[d].outline);
+      if (shared <= 0.0)
+        continue;
       const int u = track_of[d];
       if (u < 0 || tracks_[static_cast<size_t>(u)].first_seen_ns > track.last_seen_ns) {
-        replaced = replaced || hull_iou(predicted_outline, detected[d].outline) > 0.3;
+        replaced =
+            replaced || hull_iou(shared, predicted_area, hull_area(detected[d].outline)) > 0.3;
         continue;
       }
       under_cover = under_cover || (moves_with(tracks_[static_cast<size_t>(u)], track) &&
-                                    hull_covered_share(predicted_outline, detected[d].outline) >=
-                                        settings_.carry_under_cover_share);
+                                    shared >= settings_.carry_under_cover_share * predicted_area);
     }
     const bool moving =
         track.has_velocity &&

@@ -27,6 +27,9 @@ constexpr float kGraspMarginPx = 2.f;
 /// Area of the intersection of two outlines, in square pixels (outlines are taken as convex).
 double overlap_area(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b);
 
+/// Area of an outline taken as convex (its convex hull), in square pixels; 0 below 3 points.
+double hull_area(const std::vector<cv::Point2f>& outline);
+
 /// Which of two overlapping instances lies on top where they overlap: +1 for `a`, -1 for `b`,
 /// 0 when it cannot be told. The upper one keeps its features in the shared area while the
 /// lower one loses them; where features are too few to tell, the frame's pixels in the shared
