@@ -64,9 +64,7 @@ void check_frames(const cv::Mat& grey, const cv::Mat& colour) {
 /// The instances of model `m` (`model`) among the frame's features and their matches.
 std::vector<Instance> find_instances(const Model& model, int m, const Features& scene,
                                      const std::vector<Match>& matches, const Settings& s) {
-  detail::ModelScene ms{
-      model, model.features(s.features).keypoints, m,      scene.keypoints, {}, {}, 0.0,
-      {},    &model.features(s.features),          &scene, s.features};
+  detail::ModelScene ms{model, model.features(s.features), m, scene, s.features, {}, {}, 0.0, {}};
   for (const Match& match : matches)
     if (match.model == m)
       ms.matches.push_back(match);
@@ -77,8 +75,8 @@ std::vector<Instance> find_instances(const Model& model, int m, const Features& 
   if (ms.matches.size() < fewest)
     return {};
   detail::index_matches(ms);
-  ms.votes = cast_votes(ms.matches, ms.model_keypoints, scene.keypoints, ms.model.principal_points,
-                        s.allow_scale);
+  ms.votes = cast_votes(ms.matches, ms.model_features.keypoints, scene.keypoints,
+                        ms.model.principal_points, s.allow_scale);
   ms.bandwidth =
       s.bandwidth > 0.0 ? s.bandwidth : kAutoBandwidthShare * detail::model_side(ms.model);
 

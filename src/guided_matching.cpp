@@ -41,18 +41,16 @@ std::vector<cv::Point2f> carried(const std::vector<cv::Point2f>& points, const c
 
 } // namespace
 
-GuidedMatcher::GuidedMatcher(const ModelScene& ms, const Features& model, const Features& scene,
-                             FeatureKind kind)
-    : ms_(ms), model_(model), scene_(scene), kind_(kind) {
+GuidedMatcher::GuidedMatcher(const ModelScene& ms) : ms_(ms) {
   reach_ = kReachShare * std::sqrt(std::abs(cv::contourArea(ms.model.outline)));
   std::vector<cv::Point2f> at;
-  at.reserve(model.keypoints.size());
-  for (const cv::KeyPoint& k : model.keypoints)
+  at.reserve(ms.model_features.keypoints.size());
+  for (const cv::KeyPoint& k : ms.model_features.keypoints)
     at.push_back(k.pt);
   model_grid_ = PointGrid(std::move(at), std::max(1.0, reach_));
   at.clear();
-  at.reserve(scene.keypoints.size());
-  for (const cv::KeyPoint& k : scene.keypoints)
+  at.reserve(ms.scene.keypoints.size());
+  for (const cv::KeyPoint& k : ms.scene.keypoints)
     at.push_back(k.pt);
   scene_grid_ = PointGrid(std::move(at), std::max(8.0, 0.5 * model_side(ms.model)));
 }
@@ -65,9 +63,9 @@ std::vector<GuidedMatcher::Pair> GuidedMatcher::pairs(const cv::Matx33d& map,
   cv::Matx33d back;
   if (!cv::invert(map, back, cv::DECOMP_LU))
     return out;
-  const double limit = agree_distance(kind_);
+  const double limit = agree_distance(ms_.kind);
   for (int s : scene_grid_.inside(bounds(outline))) {
-    const cv::KeyPoint& ks = scene_.keypoints[s];
+    const cv::KeyPoint& ks = ms_.scene.keypoints[s];
     if (cv::pointPolygonTest(outline, ks.pt, false) < 0)
       continue;
     const cv::Vec3d q = back * cv::Vec3d(ks.pt.x, ks.pt.y, 1.0);
@@ -77,17 +75,17 @@ std::vector<GuidedMatcher::Pair> GuidedMatcher::pairs(const cv::Matx33d& map,
     int best = -1;
     double best_d = 0.0;
     model_grid_.for_neighbours(at, [&](int k) {
-      if (!placed_alike(ks, model_.keypoints[k], at, radius, near.angle, near.scale))
+      if (!placed_alike(ks, ms_.model_features.keypoints[k], at, radius, near.angle, near.scale))
         return;
-      const double dist =
-          distance_within(scene_.descriptors, s, model_.descriptors, k, limit, kind_);
+      const double dist = distance_within(ms_.scene.descriptors, s, ms_.model_features.descriptors,
+                                          k, limit, ms_.kind);
       if (dist >= 0.0 && (best < 0 || dist < best_d)) {
         best = k;
         best_d = dist;
       }
     });
     if (best >= 0)
-      out.push_back({model_.keypoints[best].pt, ks.pt});
+      out.push_back({ms_.model_features.keypoints[best].pt, ks.pt});
   }
   return out;
 }

@@ -21,11 +21,10 @@ constexpr size_t kMinGuidedVotes = 2;
 /// Fewest keypoints that guided matching must pair before its pose stands.
 constexpr size_t kMinGuidedMatches = 5;
 
-/// What guided matching searches, built once per model and frame.
+/// What guided matching searches, built once per model and frame where a hypothesis needs it.
 class GuidedMatcher {
 public:
-  GuidedMatcher(const ModelScene& ms, const Features& model, const Features& scene,
-                FeatureKind kind);
+  explicit GuidedMatcher(const ModelScene& ms);
   /// Pairs the scene keypoints on the outline of `pose` with model keypoints of a close
   /// descriptor near where the pose carries them, fits an affine map on them (RANSAC), pairs
   /// again near where that map carries them and fits a homography when they are
@@ -44,9 +43,6 @@ private:
                           const std::vector<cv::Point2f>& outline, double radius) const;
 
   const ModelScene& ms_;
-  const Features& model_;
-  const Features& scene_;
-  FeatureKind kind_;
   PointGrid model_grid_, scene_grid_;
   double reach_; ///< First pass's radius, model pixels.
 };

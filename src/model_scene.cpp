@@ -47,7 +47,7 @@ std::vector<cv::Point2f> scene_points(const ModelScene& ms, const std::vector<in
   std::vector<cv::Point2f> out;
   out.reserve(idx.size());
   for (int i : idx)
-    out.push_back(ms.scene_keypoints[ms.matches[i].scene_point].pt);
+    out.push_back(ms.scene.keypoints[ms.matches[i].scene_point].pt);
   return out;
 }
 
@@ -55,7 +55,7 @@ std::vector<cv::Point2f> model_points(const ModelScene& ms, const std::vector<in
   std::vector<cv::Point2f> out;
   out.reserve(idx.size());
   for (int i : idx)
-    out.push_back(ms.model_keypoints[ms.matches[i].model_point].pt);
+    out.push_back(ms.model_features.keypoints[ms.matches[i].model_point].pt);
   return out;
 }
 
@@ -63,7 +63,7 @@ void index_matches(ModelScene& ms) {
   std::vector<cv::Point2f> at;
   at.reserve(ms.matches.size());
   for (const Match& m : ms.matches)
-    at.push_back(ms.scene_keypoints[m.scene_point].pt);
+    at.push_back(ms.scene.keypoints[m.scene_point].pt);
   // Cells of half the model's side, at least 8 px: a pose's box spans a few of them.
   ms.match_grid = PointGrid(std::move(at), std::max(8.0, 0.5 * model_side(ms.model)));
 }

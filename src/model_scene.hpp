@@ -19,19 +19,18 @@ namespace pickdetect::detail {
 /// What every method shares for one model: its matches, the keypoints on both sides and votes.
 struct ModelScene {
   const Model& model;
-  const std::vector<cv::KeyPoint>& model_keypoints;
+  /// The model's and the frame's features of the kind matched (descriptors included: guided
+  /// matching compares them again).
+  const Features& model_features;
   int index;
-  const std::vector<cv::KeyPoint>& scene_keypoints;
+  const Features& scene;
+  FeatureKind kind = FeatureKind::Sift;
   std::vector<Match> matches;
   std::vector<Vote> votes;
   double bandwidth = 0.0;
   /// The matches' scene positions on a grid (see index_matches): match_grid.inside(box)
   /// gives the matches whose scene keypoints lie in a box, in increasing order.
   PointGrid match_grid;
-  /// The model's and the frame's features (descriptors included), for guided matching.
-  const Features* model_features = nullptr;
-  const Features* scene = nullptr;
-  FeatureKind kind = FeatureKind::Sift;
 };
 
 /// Fills the match grid of `ms` from its matches (cells of half the model's smaller side).

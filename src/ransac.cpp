@@ -78,8 +78,8 @@ std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bo
   }
   for (const std::vector<int>& g : groups) {
     HomographyFit fit;
-    if (!fit_homography_ransac(subset(ms.matches, g), ms.model_keypoints, ms.scene_keypoints,
-                               s.ransac_reprojection_px,
+    if (!fit_homography_ransac(subset(ms.matches, g), ms.model_features.keypoints,
+                               ms.scene.keypoints, s.ransac_reprojection_px,
                                std::max(s.min_matches, kMinHomographyInliers), fit))
       continue;
     Instance inst;
@@ -87,7 +87,7 @@ std::vector<Instance> find_by_ransac(const ModelScene& ms, const Settings& s, bo
     inst.matches = static_cast<int>(fit.inliers.size());
     inst.distinct_matches = inst.matches;
     for (int k : fit.inliers)
-      inst.support.push_back(ms.scene_keypoints[ms.matches[g[k]].scene_point].pt);
+      inst.support.push_back(ms.scene.keypoints[ms.matches[g[k]].scene_point].pt);
     found.push_back(std::move(inst));
   }
   return found;

@@ -85,11 +85,11 @@ std::vector<int> inliers_of(const ModelScene& ms, const Similarity& pose, const 
                         v.scale / pose.scale < 1.0 / kInlierScaleFactor))
       continue;
     const Match& m = ms.matches[i];
-    const cv::Point2f model = ms.model_keypoints[m.model_point].pt;
+    const cv::Point2f model = ms.model_features.keypoints[m.model_point].pt;
     const cv::Vec3d p = map * cv::Vec3d(model.x, model.y, 1.0);
     if (!(p[2] > 0.0)) // Behind the camera: no inlier.
       continue;
-    const cv::Point2f seen = ms.scene_keypoints[m.scene_point].pt;
+    const cv::Point2f seen = ms.scene.keypoints[m.scene_point].pt;
     const double dx = p[0] / p[2] - seen.x, dy = p[1] / p[2] - seen.y;
     if (dx * dx + dy * dy <= tol * tol)
       in.push_back(static_cast<int>(i));
@@ -224,7 +224,7 @@ bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool all
   for (const int i : ms.match_grid.inside(bounds(grown))) {
     if (claimed[i] || angle_difference(ms.votes[i].angle, pose.angle) > kInlierAngleDeg)
       continue;
-    if (cv::pointPolygonTest(grown, ms.scene_keypoints[ms.matches[i].scene_point].pt, false) >= 0)
+    if (cv::pointPolygonTest(grown, ms.scene.keypoints[ms.matches[i].scene_point].pt, false) >= 0)
       candidate[i] = 1;
   }
   std::vector<int> pool;

@@ -6,11 +6,13 @@
 #include "guided_matching.hpp"
 #include "median.hpp"
 #include "model_scene.hpp"
+#include "polygon.hpp"
 
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace pickdetect {
 
@@ -104,8 +106,8 @@ int distinct_among(const ModelScene& ms, const std::vector<int>& idx) {
 Similarity pose_of_match(const ModelScene& ms, int i) {
   const Match& m = ms.matches[i];
   Similarity pose{ms.votes[i].angle, ms.votes[i].scale, {0.0, 0.0}};
-  const cv::Point2f at = pose.apply(ms.model_keypoints[m.model_point].pt);
-  const cv::Point2f seen = ms.scene_keypoints[m.scene_point].pt;
+  const cv::Point2f at = pose.apply(ms.model_features.keypoints[m.model_point].pt);
+  const cv::Point2f seen = ms.scene.keypoints[m.scene_point].pt;
   pose.translation = cv::Point2d(seen.x - at.x, seen.y - at.y);
   return pose;
 }
@@ -127,8 +129,8 @@ std::vector<int> refine_from_members(const ModelScene& ms, const std::vector<int
     size_t count = 0;
     for (int j : members) {
       const Match& m = ms.matches[j];
-      const cv::Point2f d = candidate.apply(ms.model_keypoints[m.model_point].pt) -
-                            ms.scene_keypoints[m.scene_point].pt;
+      const cv::Point2f d = candidate.apply(ms.model_features.keypoints[m.model_point].pt) -
+                            ms.scene.keypoints[m.scene_point].pt;
       count += !claimed[j] && d.dot(d) <= tol * tol;
     }
     if (count > best_count) {
@@ -297,15 +299,16 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
     }
     found.push_back(std::move(inst));
   }
-  if (!ms.model.faint_print() || (weak.empty() && found.empty()) || !s.refine || !s.allow_scale ||
-      ms.scene == nullptr || ms.model_features == nullptr)
+  if (!ms.model.faint_print() || (weak.empty() && found.empty()) || !s.refine || !s.allow_scale)
     return found;
   // A model of faint print (few keypoints, found at a lowered threshold: a white glossy carton)
   // leaves a face tilted far off the picture plane or under glare with two or three votes: most
   // of its matches fail the ratio test. Such hypotheses are completed by guided matching where
   // the frame's keypoints bear them out. Models of rich print keep the ratio test's word: in
   // their clutter (the dev sets) guided matching built ghosts of five to ten pairs.
-  const GuidedMatcher guided(ms, *ms.model_features, *ms.scene, ms.kind);
+  // Its grids over every model and frame keypoint are built on the first hypothesis that
+  // needs them: most frames have none.
+  std::optional<GuidedMatcher> guided;
   auto inside_found = [&](cv::Point2f p) {
     return std::any_of(found.begin(), found.end(), [&](const Instance& other) {
       return cv::pointPolygonTest(other.outline, p, false) >= 0;
@@ -316,7 +319,9 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       return;
     cv::Matx33d h;
     std::vector<cv::Point2f> support;
-    if (!guided.complete(pose, h, support))
+    if (!guided)
+      guided.emplace(ms);
+    if (!guided->complete(pose, h, support))
       return;
     Instance inst;
     place(inst, ms.model, h);
@@ -335,7 +340,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
   }
   // Faces packed in a row beside one found: its neighbours' places, a face along each axis of
   // the picture, carried by its pose (a homography follows a foreshortened row).
-  const cv::Rect2f side = cv::boundingRect(ms.model.outline);
+  const cv::Rect2f side = bounds(ms.model.outline);
   const cv::Point2f c = ms.model.principal_points[0];
   const size_t first_found = found.size();
   for (size_t f = 0; f < first_found; ++f) {
