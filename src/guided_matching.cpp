@@ -91,7 +91,7 @@ std::vector<GuidedMatcher::Pair> GuidedMatcher::pairs(const cv::Matx33d& map,
 }
 
 bool GuidedMatcher::complete(const Similarity& pose, cv::Matx33d& h,
-                             std::vector<cv::Point2f>& support) const {
+                             std::vector<cv::Point2f>& support, bool keep_affine) const {
   const cv::Point2f centre = ms_.model.principal_points[0];
   const std::vector<Pair> first = pairs(
       to_matrix(pose), pose, grown(pose.apply(ms_.model.outline), pose.apply(centre)), reach_);
@@ -111,10 +111,10 @@ bool GuidedMatcher::complete(const Similarity& pose, cv::Matx33d& h,
                   a.at<double>(1, 1), a.at<double>(1, 2), 0, 0, 1);
   // Paired again, tightly, where the map carries them; a homography fitted on them while they
   // are enough for its eight parameters.
+  if (!front_view(map))
+    return false;
   std::vector<Pair> in;
   for (int round = 0; round < kRounds; ++round) {
-    if (!front_view(map))
-      return false;
     const Similarity near = similarity_near(map, centre);
     std::vector<Pair> again =
         pairs(map, near, carried(ms_.model.outline, map), tol / std::max(near.scale, 1e-3));
@@ -133,6 +133,14 @@ bool GuidedMatcher::complete(const Similarity& pose, cv::Matx33d& h,
     cv::Matx33d next;
     if (!fit_homography(from, to, map, next, {}, Loss::Cauchy))
       break;
+    // A homography that turns the face over or foreshortens it past kMaxForeshortening: from
+    // a hypothesis of a few votes it is no face; pairs bunched in one part of a found face
+    // cannot bear it out, and the map before it stands (keep_affine).
+    if (!front_view(next)) {
+      if (!keep_affine)
+        return false;
+      break;
+    }
     map = next;
     h = map;
   }

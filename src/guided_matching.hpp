@@ -29,8 +29,11 @@ public:
   /// descriptor near where the pose carries them, fits an affine map on them (RANSAC), pairs
   /// again near where that map carries them and fits a homography when they are
   /// kMinForeshortenedMatches or more. True, with the map `h` and the paired scene keypoints'
-  /// positions in `support`, when kMinGuidedMatches or more agree with it.
-  bool complete(const Similarity& pose, cv::Matx33d& h, std::vector<cv::Point2f>& support) const;
+  /// positions in `support`, when kMinGuidedMatches or more agree with it. A homography that
+  /// shows no front view fails it, unless `keep_affine` (a face found on a few matches bunched
+  /// in one part of it): then the map before it stands.
+  bool complete(const Similarity& pose, cv::Matx33d& h, std::vector<cv::Point2f>& support,
+                bool keep_affine = false) const;
 
 private:
   struct Pair {

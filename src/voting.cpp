@@ -94,6 +94,12 @@ constexpr double kRotationBandwidthDeg = 20.0;
 /// similarity fitted on ten inliers spread over a tilted object leaves up to 2 px.)
 constexpr size_t kSparseInliers = 6;
 constexpr double kMaxSparseRmsPx = 1.25;
+/// A face of a faint-print model found on fewer than kThinShortfall times min_matches inliers
+/// takes the pose of guided matching from it where that pairs at least kThinGain times as many
+/// keypoints: as many again beside the bunch it was found on. (On the real tote, poses that
+/// gained less were a logo's pose stretched over a box's narrow side.)
+constexpr size_t kThinShortfall = 2;
+constexpr size_t kThinGain = 2;
 
 /// How many of the given matches fitted no other model about as well (see Ambiguity::Share).
 int distinct_among(const ModelScene& ms, const std::vector<int>& idx) {
@@ -356,6 +362,34 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
           turn.apply(c);
       complete(Similarity{found[f].angle, found[f].scale, cv::Point2d(to.x, to.y)});
     }
+  }
+  // A face found on a few matches bunched in one part of it (the logo of a face tilted far
+  // off the picture plane): its pose rests on that part alone, and the scene explanation may
+  // find it too little spread. Guided matching from it pairs the rest of the face; where it
+  // pairs as many again, its pose stands beside it as a guided instance (never pickable), which
+  // the scene explanation weighs after every other: it takes the place only if the first fails.
+  const size_t thin_below = kThinShortfall * static_cast<size_t>(std::max(1, s.min_matches));
+  for (size_t f = 0; f < first_found; ++f) {
+    const size_t matches = static_cast<size_t>(found[f].matches);
+    if (matches >= thin_below)
+      continue;
+    const Similarity turn{found[f].angle, found[f].scale, {}};
+    const cv::Point2f to = found[f].points[0] - turn.apply(c);
+    cv::Matx33d h;
+    std::vector<cv::Point2f> support;
+    if (!guided)
+      guided.emplace(ms);
+    if (!guided->complete(Similarity{found[f].angle, found[f].scale, cv::Point2d(to.x, to.y)}, h,
+                          support, true) ||
+        support.size() < kThinGain * matches)
+      continue;
+    Instance inst;
+    place(inst, ms.model, h);
+    inst.matches = static_cast<int>(support.size());
+    inst.distinct_matches = inst.matches;
+    inst.guided = true;
+    inst.support = std::move(support);
+    found.push_back(std::move(inst));
   }
   return found;
 }
