@@ -95,9 +95,9 @@ constexpr double kRotationBandwidthDeg = 20.0;
 constexpr size_t kSparseInliers = 6;
 constexpr double kMaxSparseRmsPx = 1.25;
 /// A face of a faint-print model found on fewer than kThinShortfall times min_matches inliers
-/// takes the pose of guided matching from it where that pairs at least kThinGain times as many
-/// keypoints: as many again beside the bunch it was found on. (On the real tote, poses that
-/// gained less were a logo's pose stretched over a box's narrow side.)
+/// also starts guided matching at its pose; the pose found stands beside it where it pairs at
+/// least kThinGain times as many keypoints: as many again beside the bunch it was found on. (On
+/// the real tote, poses that gained less were a logo's pose stretched over a box's narrow side.)
 constexpr size_t kThinShortfall = 2;
 constexpr size_t kThinGain = 2;
 
@@ -315,6 +315,11 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
   // Its grids over every model and frame keypoint are built on the first hypothesis that
   // needs them: most frames have none.
   std::optional<GuidedMatcher> guided;
+  auto matcher = [&]() -> const GuidedMatcher& {
+    if (!guided)
+      guided.emplace(ms);
+    return *guided;
+  };
   auto inside_found = [&](cv::Point2f p) {
     return std::any_of(found.begin(), found.end(), [&](const Instance& other) {
       return cv::pointPolygonTest(other.outline, p, false) >= 0;
@@ -325,9 +330,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       return;
     cv::Matx33d h;
     std::vector<cv::Point2f> support;
-    if (!guided)
-      guided.emplace(ms);
-    if (!guided->complete(pose, h, support))
+    if (!matcher().complete(pose, h, support))
       return;
     Instance inst;
     place(inst, ms.model, h);
@@ -377,10 +380,8 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
     const cv::Point2f to = found[f].points[0] - turn.apply(c);
     cv::Matx33d h;
     std::vector<cv::Point2f> support;
-    if (!guided)
-      guided.emplace(ms);
-    if (!guided->complete(Similarity{found[f].angle, found[f].scale, cv::Point2d(to.x, to.y)}, h,
-                          support, true) ||
+    if (!matcher().complete(Similarity{found[f].angle, found[f].scale, cv::Point2d(to.x, to.y)}, h,
+                            support, true) ||
         support.size() < kThinGain * matches)
       continue;
     Instance inst;
