@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
-// Guided matching: a hypothesis of two or three agreeing votes, completed from the keypoints
-// its pose predicts.
+// Guided matching: a pose of few votes or matches (a hypothesis of two or three votes, a found
+// face's neighbour in a packed row, a face found on a bunch of matches), completed from the
+// keypoints it predicts.
 #include "guided_matching.hpp"
 
 #include "descriptor_distance.hpp"
@@ -8,7 +9,6 @@
 
 #include <pickdetect/pose.hpp>
 
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <cmath>
@@ -24,6 +24,8 @@ constexpr double kReachShare = 0.1;
 constexpr double kOutlineGrowth = 1.25;
 /// Rounds of pairing and refitting.
 constexpr int kRounds = 3;
+/// The first affine map's RANSAC draws at most this many samples.
+constexpr int kAffineSamples = 2000;
 
 std::vector<cv::Point2f> grown(const std::vector<cv::Point2f>& outline, cv::Point2f centre) {
   std::vector<cv::Point2f> out;
@@ -104,15 +106,11 @@ bool GuidedMatcher::complete(const Similarity& pose, cv::Matx33d& h,
   }
   // The RANSAC threshold and the second pass's radius: the refinement's inlier distance.
   const double tol = inlier_distance(ms_, pose.scale);
-  const cv::Mat a = cv::estimateAffine2D(from, to, cv::noArray(), cv::RANSAC, tol, 2000, 0.995, 10);
-  if (a.empty())
+  cv::Matx33d map;
+  if (!fit_front_affine(from, to, tol, kAffineSamples, map))
     return false;
-  cv::Matx33d map(a.at<double>(0, 0), a.at<double>(0, 1), a.at<double>(0, 2), a.at<double>(1, 0),
-                  a.at<double>(1, 1), a.at<double>(1, 2), 0, 0, 1);
   // Paired again, tightly, where the map carries them; a homography fitted on them while they
   // are enough for its eight parameters.
-  if (!front_view(map))
-    return false;
   std::vector<Pair> in;
   for (int round = 0; round < kRounds; ++round) {
     const Similarity near = similarity_near(map, centre);

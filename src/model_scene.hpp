@@ -79,6 +79,11 @@ constexpr double kMaxForeshortening = 0.35;
 /// Whether the linear part of `map` (an affine map, or a homography near its origin) shows a
 /// face from its front side (no mirror), foreshortened at most kMaxForeshortening.
 bool front_view(const cv::Matx33d& map);
+/// An affine map carrying `from` onto `to`, fitted by RANSAC (inlier distance `tol` scene
+/// pixels, at most `samples` draws), as a 3x3 `map`; false when none is found or it shows no
+/// front view (front_view).
+bool fit_front_affine(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                      double tol, int samples, cv::Matx33d& map);
 /// Refits a similarity pose on its own inlier matches (those not yet
 /// `claimed` by a stronger instance) until they settle; returns the inliers.
 std::vector<int> refine_pose(const ModelScene& ms, Similarity& pose, bool allow_scale,

@@ -117,6 +117,17 @@ bool front_view(const cv::Matx33d& map) {
   return sv.at<double>(1) >= kMaxForeshortening * sv.at<double>(0);
 }
 
+bool fit_front_affine(const std::vector<cv::Point2f>& from, const std::vector<cv::Point2f>& to,
+                      double tol, int samples, cv::Matx33d& map) {
+  const cv::Mat a =
+      cv::estimateAffine2D(from, to, cv::noArray(), cv::RANSAC, tol, samples, 0.995, 10);
+  if (a.empty())
+    return false;
+  map = cv::Matx33d(a.at<double>(0, 0), a.at<double>(0, 1), a.at<double>(0, 2), a.at<double>(1, 0),
+                    a.at<double>(1, 1), a.at<double>(1, 2), 0, 0, 1);
+  return front_view(map);
+}
+
 double inlier_distance(const ModelScene& ms, double scale) {
   return std::max(kMinInlierPx, kInlierShare * model_side(ms.model) * scale);
 }
@@ -234,14 +245,9 @@ bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool all
   if (pool.size() < fewest || pool.size() <= in.size())
     return false;
   const double tol = inlier_distance(ms, pose.scale);
-  cv::Mat mask;
-  const cv::Mat a = cv::estimateAffine2D(model_points(ms, pool), scene_points(ms, pool), mask,
-                                         cv::RANSAC, tol, kForeshortenedSamples, 0.995, 10);
-  if (a.empty())
-    return false;
-  cv::Matx33d map(a.at<double>(0, 0), a.at<double>(0, 1), a.at<double>(0, 2), a.at<double>(1, 0),
-                  a.at<double>(1, 1), a.at<double>(1, 2), 0, 0, 1);
-  if (!front_view(map))
+  cv::Matx33d map;
+  if (!fit_front_affine(model_points(ms, pool), scene_points(ms, pool), tol, kForeshortenedSamples,
+                        map))
     return false;
   // Beside a similarity that holds, the matches must agree with its rotation and scale; where
   // none held (fewer than kMinForeshortenedMatches asked for: the similarity kept too few
