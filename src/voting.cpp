@@ -325,6 +325,16 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       return cv::pointPolygonTest(other.outline, p, false) >= 0;
     });
   };
+  // An instance of guided matching: placed by its map, supported by its pairs.
+  auto guided_instance = [&](const cv::Matx33d& h, std::vector<cv::Point2f> support) {
+    Instance inst;
+    place(inst, ms.model, h);
+    inst.matches = static_cast<int>(support.size());
+    inst.distinct_matches = inst.matches;
+    inst.guided = true;
+    inst.support = std::move(support);
+    return inst;
+  };
   auto complete = [&](const Similarity& pose) {
     if (inside_found(pose.apply(ms.model.principal_points[0])))
       return;
@@ -332,15 +342,9 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
     std::vector<cv::Point2f> support;
     if (!matcher().complete(pose, h, support))
       return;
-    Instance inst;
-    place(inst, ms.model, h);
-    if (inside_found(inst.center))
-      return;
-    inst.matches = static_cast<int>(support.size());
-    inst.distinct_matches = inst.matches;
-    inst.guided = true;
-    inst.support = std::move(support);
-    found.push_back(std::move(inst));
+    Instance inst = guided_instance(h, std::move(support));
+    if (!inside_found(inst.center))
+      found.push_back(std::move(inst));
   };
   for (const std::vector<int>* members : weak) {
     Similarity pose;
@@ -351,19 +355,22 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
   // the picture, carried by its pose (a homography follows a foreshortened row).
   const cv::Rect2f side = bounds(ms.model.outline);
   const cv::Point2f c = ms.model.principal_points[0];
+  // A found face's rotation and scale, its centre at `at`.
+  auto pose_at = [&](const Instance& face, cv::Point2f at) {
+    const Similarity turn{face.angle, face.scale, {}};
+    const cv::Point2f to = at - turn.apply(c);
+    return Similarity{face.angle, face.scale, cv::Point2d(to.x, to.y)};
+  };
   const size_t first_found = found.size();
   for (size_t f = 0; f < first_found; ++f) {
-    const Similarity turn{found[f].angle, found[f].scale, {}};
     const cv::Matx33d h = found[f].homography;
     for (const cv::Point2f step : {cv::Point2f(side.width, 0.f), cv::Point2f(-side.width, 0.f),
                                    cv::Point2f(0.f, side.height), cv::Point2f(0.f, -side.height)}) {
       const cv::Vec3d q = h * cv::Vec3d(c.x + step.x, c.y + step.y, 1.0);
       if (!(q[2] > 0.0))
         continue;
-      const cv::Point2f to =
-          cv::Point2f(static_cast<float>(q[0] / q[2]), static_cast<float>(q[1] / q[2])) -
-          turn.apply(c);
-      complete(Similarity{found[f].angle, found[f].scale, cv::Point2d(to.x, to.y)});
+      complete(pose_at(
+          found[f], cv::Point2f(static_cast<float>(q[0] / q[2]), static_cast<float>(q[1] / q[2]))));
     }
   }
   // A face found on a few matches bunched in one part of it (the logo of a face tilted far
@@ -376,21 +383,11 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
     const size_t matches = static_cast<size_t>(found[f].matches);
     if (matches >= thin_below)
       continue;
-    const Similarity turn{found[f].angle, found[f].scale, {}};
-    const cv::Point2f to = found[f].points[0] - turn.apply(c);
     cv::Matx33d h;
     std::vector<cv::Point2f> support;
-    if (!matcher().complete(Similarity{found[f].angle, found[f].scale, cv::Point2d(to.x, to.y)}, h,
-                            support, true) ||
-        support.size() < kThinGain * matches)
-      continue;
-    Instance inst;
-    place(inst, ms.model, h);
-    inst.matches = static_cast<int>(support.size());
-    inst.distinct_matches = inst.matches;
-    inst.guided = true;
-    inst.support = std::move(support);
-    found.push_back(std::move(inst));
+    if (matcher().complete(pose_at(found[f], found[f].points[0]), h, support, true) &&
+        support.size() >= kThinGain * matches)
+      found.push_back(guided_instance(h, std::move(support)));
   }
   return found;
 }
