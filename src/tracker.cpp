@@ -209,6 +209,10 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
     tracks_ = std::move(live);
   }
 
+  // Each detection's area (its outline taken as convex), for the overlaps below.
+  std::vector<double> detected_area(detected.size());
+  for (size_t d = 0; d < detected.size(); d++)
+    detected_area[d] = hull_area(detected[d].outline);
   // Candidate pairs (cost, track, detection), gated, of the same model.
   std::vector<std::tuple<double, size_t, size_t>> pairs;
   std::vector<cv::Point2d> offsets(tracks_.size());
@@ -239,7 +243,7 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
         continue;
       const double cost = distance +
                           0.3 * (1.0 - hull_iou(overlap_area(predicted_outline, det.outline),
-                                                predicted_area, hull_area(det.outline))) +
+                                                predicted_area, detected_area[d])) +
                           0.2 * angle_difference(det.angle, track.last.angle) / 90.0;
       pairs.emplace_back(cost, t, d);
     }
@@ -376,8 +380,7 @@ TrackedFrame Tracker::update(const std::vector<Instance>& detected, std::int64_t
         continue;
       const int u = track_of[d];
       if (u < 0 || tracks_[static_cast<size_t>(u)].first_seen_ns > track.last_seen_ns) {
-        replaced =
-            replaced || hull_iou(shared, predicted_area, hull_area(detected[d].outline)) > 0.3;
+        replaced = replaced || hull_iou(shared, predicted_area, detected_area[d]) > 0.3;
         continue;
       }
       under_cover = under_cover || (moves_with(tracks_[static_cast<size_t>(u)], track) &&
