@@ -25,10 +25,6 @@ constexpr double kSamePlaceIoU = 0.8;
 constexpr int kMinDistinct = 6;
 constexpr int kDistinctMargin = 3;
 
-double outline_area(const Instance& inst) {
-  return inst.outline.size() >= 3 ? std::abs(cv::contourArea(inst.outline)) : 0.0;
-}
-
 /// Whether `strong` explains `weak`: same place, and most of weak's support lies on it.
 bool explains(const Instance& strong, const Instance& weak) {
   if (!same_place(strong, weak))
@@ -62,8 +58,10 @@ bool rest_on_the_same_features(const std::vector<cv::Point2f>& a,
 } // namespace
 
 bool same_place(const Instance& a, const Instance& b) {
+  // overlap_area intersects the outlines' convex hulls: the union is of the hulls too, so the
+  // ratio stays within 0-1 for an outline that is not convex.
   const double shared = overlap_area(a.outline, b.outline);
-  const double joint = outline_area(a) + outline_area(b) - shared;
+  const double joint = hull_area(a.outline) + hull_area(b.outline) - shared;
   return joint > 0.0 && shared >= kSamePlaceIoU * joint;
 }
 

@@ -78,7 +78,7 @@ constexpr double kMaxGuidedOverlap = 0.2;
 
 /// Whether instance `i`'s outline lies more than kMaxGuidedOverlap on an instance kept so far.
 bool lies_on_kept(const std::vector<Instance>& instances, const std::vector<char>& keep, size_t i) {
-  const double area = std::abs(cv::contourArea(instances[i].outline));
+  const double area = hull_area(instances[i].outline); // overlap_area's hulls
   for (size_t j = 0; j < instances.size(); ++j)
     if (keep[j] &&
         overlap_area(instances[i].outline, instances[j].outline) > kMaxGuidedOverlap * area)

@@ -136,3 +136,17 @@ TEST(LookAlikes, TwoViewsOfOneProductInOnePlaceAreNoRivals) {
   detail::drop_look_alikes(found, 0);
   EXPECT_TRUE(found.empty());
 }
+
+TEST(LookAlikes, SamePlaceOfOutlinesThatAreNotConvex) {
+  // Two L-shaped outlines of three unit cells each (scaled by 100) that tile a 200 x 200
+  // square: they share two cells, an intersection over union of 0.5. Their convex hulls share
+  // 3 of 4 cells; measured against the L's own areas (3 each) that read as 3 / 3, one place.
+  const float u = 100.f;
+  Instance l = placed(0, {{0, 0}, {2 * u, 0}, {2 * u, u}, {u, u}, {u, 2 * u}, {0, 2 * u}}, {});
+  Instance turned = placed(1, {{2 * u, 2 * u}, {0, 2 * u}, {0, u}, {u, u}, {u, 0}, {2 * u, 0}}, {});
+  EXPECT_FALSE(detail::same_place(l, turned));
+  EXPECT_TRUE(detail::same_place(l, l));
+  // A convex outline against itself shifted by a twentieth of its side: one place.
+  EXPECT_TRUE(
+      detail::same_place(placed(0, square(0, 0, 200), {}), placed(1, square(10, 0, 200), {})));
+}
