@@ -16,6 +16,14 @@ namespace {
 /// Wiener deconvolution's noise-to-signal ratio: where the box's spectrum is weaker than this
 /// (near its zeros) the frame's frequencies are damped, not amplified into noise.
 constexpr double kNoiseToSignal = 0.01;
+/// Beside a strong edge (the frame's grey level stepping by kStrongEdgeStep or more across one
+/// blur length, as a light box's rim on a dark belt does) the damped frequencies near the box's
+/// zeros ring: bands parallel to the edge, which SIFT finds as rows of small blobs, and a model
+/// of thin strokes on plain ground matches them (a hand-drawn picture found on another light
+/// box's rim, its instance carried from frame to frame). There the frame is deconvolved with
+/// kEdgeNoiseToSignal instead, within a blur length of the edge's ramp.
+constexpr double kEdgeNoiseToSignal = 0.05;
+constexpr float kStrongEdgeStep = 150.f;
 /// A motion within this share of an axis (its sine or cosine) is taken along it: the rows or
 /// columns are deconvolved as they are, with no rotation.
 constexpr double kAxisSlack = 0.02;
@@ -41,6 +49,56 @@ std::vector<double> box_weights(double length) {
   return w;
 }
 
+/// The Wiener filter of a box blur of weights `w` (centred), for a DFT of `n` points.
+std::vector<cv::Vec2f> wiener_filter(const std::vector<double>& w, int n, double noise_to_signal) {
+  const int r = static_cast<int>(w.size() / 2);
+  std::vector<cv::Vec2f> filter(static_cast<size_t>(n));
+  for (int u = 0; u < n; ++u) {
+    double re = 0.0, im = 0.0;
+    for (int k = -r; k <= r; ++k) {
+      const double a = -2.0 * CV_PI * u * k / n;
+      re += w[static_cast<size_t>(k + r)] * std::cos(a);
+      im += w[static_cast<size_t>(k + r)] * std::sin(a);
+    }
+    const double power = re * re + im * im + noise_to_signal;
+    filter[static_cast<size_t>(u)] =
+        cv::Vec2f(static_cast<float>(re / power), static_cast<float>(-im / power));
+  }
+  return filter;
+}
+
+/// `spectrum`'s rows (DFT_ROWS, complex) through `filter`, back to real rows.
+cv::Mat filtered_rows(const cv::Mat& spectrum, const std::vector<cv::Vec2f>& filter) {
+  cv::Mat product(spectrum.size(), spectrum.type());
+  for (int y = 0; y < spectrum.rows; ++y) {
+    const cv::Vec2f* row = spectrum.ptr<cv::Vec2f>(y);
+    cv::Vec2f* out = product.ptr<cv::Vec2f>(y);
+    for (int u = 0; u < spectrum.cols; ++u) {
+      const cv::Vec2f a = row[u], g = filter[static_cast<size_t>(u)];
+      out[u] = cv::Vec2f(a[0] * g[0] - a[1] * g[1], a[0] * g[1] + a[1] * g[0]);
+    }
+  }
+  cv::Mat real;
+  cv::idft(product, real, cv::DFT_ROWS | cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);
+  return real;
+}
+
+/// Where `f`'s rows step by kStrongEdgeStep or more across `length` pixels, grown by a length
+/// along the rows and a pixel across them (CV_8U, 255 there).
+cv::Mat strong_edges(const cv::Mat& f, double length) {
+  const int half = std::max(1, static_cast<int>(std::lround(length / 2.0)));
+  cv::Mat strong = cv::Mat::zeros(f.size(), CV_8UC1);
+  if (f.cols <= 2 * half)
+    return strong;
+  cv::Mat step;
+  cv::absdiff(f.colRange(2 * half, f.cols), f.colRange(0, f.cols - 2 * half), step);
+  cv::Mat ramp = step >= kStrongEdgeStep;
+  ramp.copyTo(strong.colRange(half, f.cols - half));
+  const int reach = static_cast<int>(std::ceil(length));
+  cv::dilate(strong, strong, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(2 * reach + 1, 3)));
+  return strong;
+}
+
 /// Rows of `f` (CV_32F) deconvolved from a box blur of `length` along them.
 void deconvolve_rows(cv::Mat& f, double length) {
   const std::vector<double> w = box_weights(length);
@@ -52,28 +110,12 @@ void deconvolve_rows(cv::Mat& f, double length) {
   cv::copyMakeBorder(padded, padded, 0, 0, 0, n - padded.cols, cv::BORDER_REFLECT_101);
   cv::Mat spectrum;
   cv::dft(padded, spectrum, cv::DFT_ROWS | cv::DFT_COMPLEX_OUTPUT);
-  std::vector<cv::Vec2f> filter(static_cast<size_t>(n));
-  for (int u = 0; u < n; ++u) {
-    double re = 0.0, im = 0.0;
-    for (int k = -r; k <= r; ++k) {
-      const double a = -2.0 * CV_PI * u * k / n;
-      re += w[static_cast<size_t>(k + r)] * std::cos(a);
-      im += w[static_cast<size_t>(k + r)] * std::sin(a);
-    }
-    const double power = re * re + im * im + kNoiseToSignal;
-    filter[static_cast<size_t>(u)] =
-        cv::Vec2f(static_cast<float>(re / power), static_cast<float>(-im / power));
-  }
-  for (int y = 0; y < spectrum.rows; ++y) {
-    cv::Vec2f* row = spectrum.ptr<cv::Vec2f>(y);
-    for (int u = 0; u < n; ++u) {
-      const cv::Vec2f a = row[u], g = filter[static_cast<size_t>(u)];
-      row[u] = cv::Vec2f(a[0] * g[0] - a[1] * g[1], a[0] * g[1] + a[1] * g[0]);
-    }
-  }
-  cv::Mat out;
-  cv::idft(spectrum, out, cv::DFT_ROWS | cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);
-  out(cv::Rect(pad, 0, f.cols, f.rows)).copyTo(f);
+  const cv::Rect frame(pad, 0, f.cols, f.rows);
+  const cv::Mat strong = strong_edges(f, length);
+  const cv::Mat sharp = filtered_rows(spectrum, wiener_filter(w, n, kNoiseToSignal))(frame);
+  if (cv::countNonZero(strong) > 0)
+    filtered_rows(spectrum, wiener_filter(w, n, kEdgeNoiseToSignal))(frame).copyTo(sharp, strong);
+  sharp.copyTo(f);
 }
 
 /// A kernel blurring along `direction` (a unit vector) by a centred box of `length` pixels.
