@@ -7,13 +7,14 @@
 #
 #   bash scripts/hard-sets.sh                # make the sets and measure them
 #   MAKE=0 bash scripts/hard-sets.sh         # measure the sets already made (the "after")
+#   SEED=23 OUT=build/hard-sets-23 bash scripts/hard-sets.sh   # the same sets from another seed
 set -euo pipefail
 cd "$(dirname "$0")/.."
 S=${SYNTH:-build/tools/synth/pickdetect-synth}
 E=${EVAL:-build/tools/eval/pickdetect-eval}
 D=/usr/share/doc/opencv-doc/examples/data
 O=${OUT:-build/hard-sets}
-C="-n 12 --size 640x480 --seed 17"
+C="-n 12 --size 640x480 --seed ${SEED:-17}"
 if [ "${MAKE:-1}" != 0 ]; then
   # The reference: the heaps and belts of soft-model and glare without either option.
   $S $C --instances 4-8 --scale 0.45-0.55 -o $O/plain $D/box.png
