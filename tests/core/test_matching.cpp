@@ -13,7 +13,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <vector>
 
 using namespace pickdetect;
@@ -114,6 +116,53 @@ TEST(Matcher, ARepeatedDesignHasTheShiftsBetweenItsCopies) {
     EXPECT_TRUE(found) << "no shift of (" << expected << ", 0)";
   }
   EXPECT_TRUE(matcher.repeat_shifts(2).empty()) << "no third model";
+}
+
+namespace {
+
+/// How many matches each scene keypoint matched gets.
+std::map<int, size_t> matches_per_feature(const std::vector<Match>& matches) {
+  std::map<int, size_t> per_feature;
+  for (const Match& m : matches)
+    ++per_feature[m.scene_point];
+  return per_feature;
+}
+
+} // namespace
+
+// A picture printing one motif 48 times over (a 64 px patch of box.png in 8 x 6 tiles: wrapping
+// paper, a hand-drawn picture of strokes of one width) is a texture, not a repeated design: a
+// feature on the motif is matched once, if it passes the ratio test against the motif's other
+// copies, not once for each of the 48 places it could mean (3,035 features made 122,141
+// matches). A bundle of three packs keeps its copies: a feature of one pack, three matches.
+TEST(Matcher, APartPrintedManyTimesOverIsATextureNotARepeatedDesign) {
+  const cv::Mat motif = test_scene::box_picture()(cv::Rect(100, 60, 64, 64)).clone();
+  Model texture;
+  texture.name = "texture";
+  cv::repeat(motif, 6, 8, texture.image);
+  texture.mask = cv::Mat(texture.image.size(), CV_8UC1, cv::Scalar(255));
+  const float w = static_cast<float>(texture.image.cols),
+              h = static_cast<float>(texture.image.rows);
+  texture.principal_points = {{w / 2, h / 2}, {0, 0}, {w, 0}, {w, h}, {0, h}};
+  texture.outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
+  texture.max_tilt_deg = 0.0;
+  compute_model_features(texture);
+  const Features scene = extract_features(texture.image, cv::Mat(), FeatureKind::Sift);
+  const std::vector<Match> matches =
+      Matcher({texture}).match(scene.descriptors, 0.8, Search::BruteForce);
+  EXPECT_LT(matches.size(), 2 * scene.keypoints.size());
+  for (const auto& [feature, count] : matches_per_feature(matches))
+    ASSERT_LE(count, 32u) << "scene feature " << feature << " matched " << count
+                          << " times: a vote for each of the motif's places";
+
+  const Model bundle = test_scene::bundle_model(3);
+  const Features seen = extract_features(bundle.image, cv::Mat(), FeatureKind::Sift);
+  const std::map<int, size_t> per_feature =
+      matches_per_feature(Matcher({bundle}).match(seen.descriptors, 0.8, Search::BruteForce));
+  const auto three = std::count_if(per_feature.begin(), per_feature.end(),
+                                   [](const auto& fc) { return fc.second == 3; });
+  EXPECT_GE(static_cast<double>(three), 0.9 * static_cast<double>(seen.keypoints.size()))
+      << "a feature of one pack of three votes for each of the three";
 }
 
 namespace {
