@@ -31,6 +31,14 @@ void add_highlight(cv::Mat& scene, const cv::Point& at, double level) {
   cv::Mat(wide + spot).convertTo(scene, CV_8UC1);
 }
 
+/// Sensor noise: Gaussian, 2 grey levels, drawn from `seed`.
+void add_sensor_noise(cv::Mat& scene, uint64 seed) {
+  cv::Mat noise(scene.size(), CV_16SC1), wide;
+  cv::RNG(seed).fill(noise, cv::RNG::NORMAL, 0, 2);
+  scene.convertTo(wide, CV_16SC1);
+  cv::Mat(wide + noise).convertTo(scene, CV_8UC1);
+}
+
 /// `picture` (the box's by default) at `pose` on a textured belt, with a highlight of
 /// `highlight` grey levels left of its middle (none: 0), blurred by the lens (a Gaussian of
 /// `lens` sigma) and along `step`'s direction by a box of `length` pixels (a line kernel sampled
@@ -56,10 +64,7 @@ cv::Mat blurred_scene(const Pose& pose, const cv::Point2f& step, double length,
     }
     cv::filter2D(scene, scene, -1, kernel);
   }
-  cv::Mat noise(kSize, CV_16SC1), wide;
-  cv::RNG(7).fill(noise, cv::RNG::NORMAL, 0, 2);
-  scene.convertTo(wide, CV_16SC1);
-  cv::Mat(wide + noise).convertTo(scene, CV_8UC1);
+  add_sensor_noise(scene, 7);
   return scene;
 }
 
@@ -134,15 +139,10 @@ int keypoints_along_rim(const cv::Mat& grey, const std::vector<cv::Point2f>& out
   cv::SIFT::create(0, 3, 0.02)->detect(grey, found);
   int along = 0;
   for (const cv::KeyPoint& k : found) {
-    bool near_corner = false, near_edge = false;
-    for (size_t i = 0; i < outline.size(); ++i) {
-      const cv::Point2f a = outline[i], b = outline[(i + 1) % outline.size()];
-      near_corner = near_corner || cv::norm(k.pt - a) < 20.0;
-      const cv::Point2f ab = b - a;
-      const double t = std::clamp(static_cast<double>((k.pt - a).dot(ab) / ab.dot(ab)), 0.0, 1.0);
-      near_edge = near_edge || cv::norm(k.pt - (a + ab * static_cast<float>(t))) < 6.0;
-    }
-    along += near_edge && !near_corner;
+    const bool near_corner = std::any_of(outline.begin(), outline.end(), [&](const cv::Point2f& c) {
+      return cv::norm(k.pt - c) < 20.0;
+    });
+    along += !near_corner && std::abs(cv::pointPolygonTest(outline, k.pt, true)) < 6.0;
   }
   return along;
 }
@@ -156,10 +156,7 @@ TEST(MotionBlur, UndoingTheBlurRaisesNoRowsOfBlobsAlongALightBoxsRim) {
   test_scene::paste(scene, plain, {pose});
   cv::Mat kernel(1, 9, CV_32F, cv::Scalar(1.0 / 9.0));
   cv::filter2D(scene, scene, -1, kernel);
-  cv::Mat noise(kSize, CV_16SC1), wide;
-  cv::RNG(3).fill(noise, cv::RNG::NORMAL, 0, 2);
-  scene.convertTo(wide, CV_16SC1);
-  cv::Mat(wide + noise).convertTo(scene, CV_8UC1);
+  add_sensor_noise(scene, 3);
   const cv::Matx23d to_scene = test_scene::model_to_scene(plain.size(), pose);
   std::vector<cv::Point2f> rim;
   for (const cv::Point2f corner :
