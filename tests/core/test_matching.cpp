@@ -137,16 +137,9 @@ std::map<int, size_t> matches_per_feature(const std::vector<Match>& matches) {
 // matches). A bundle of three packs keeps its copies: a feature of one pack, three matches.
 TEST(Matcher, APartPrintedManyTimesOverIsATextureNotARepeatedDesign) {
   const cv::Mat motif = test_scene::box_picture()(cv::Rect(100, 60, 64, 64)).clone();
-  Model texture;
-  texture.name = "texture";
-  cv::repeat(motif, 6, 8, texture.image);
-  texture.mask = cv::Mat(texture.image.size(), CV_8UC1, cv::Scalar(255));
-  const float w = static_cast<float>(texture.image.cols),
-              h = static_cast<float>(texture.image.rows);
-  texture.principal_points = {{w / 2, h / 2}, {0, 0}, {w, 0}, {w, h}, {0, h}};
-  texture.outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
-  texture.max_tilt_deg = 0.0;
-  compute_model_features(texture);
+  cv::Mat tiles;
+  cv::repeat(motif, 6, 8, tiles);
+  const Model texture = test_scene::picture_model("texture", tiles, 0.0);
   const Features scene = extract_features(texture.image, cv::Mat(), FeatureKind::Sift);
   const std::vector<Match> matches =
       Matcher({texture}).match(scene.descriptors, 0.8, Search::BruteForce);

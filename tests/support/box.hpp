@@ -44,18 +44,29 @@ inline Model faint_box_model() {
   return m;
 }
 
-/// A bundle of `packs` box.png pictures side by side, as one model (a repeated design).
-inline Model bundle_model(int packs) {
+/// A model of a whole grey picture, as a picture file without alpha loads: the picture its
+/// outline, its centre and corners its principal points; its features computed (with views up
+/// to `max_tilt_deg`).
+inline Model picture_model(const std::string& name, cv::Mat picture,
+                           double max_tilt_deg = kDefaultMaxTiltDeg) {
   Model m;
-  m.name = "bundle";
-  std::vector<cv::Mat> row(packs, box_model().image);
-  cv::hconcat(row, m.image);
+  m.name = name;
+  m.image = std::move(picture);
   m.mask = cv::Mat(m.image.size(), CV_8UC1, cv::Scalar(255));
   const float w = static_cast<float>(m.image.cols), h = static_cast<float>(m.image.rows);
   m.principal_points = {{w / 2, h / 2}, {0, 0}, {w, 0}, {w, h}, {0, h}};
   m.outline = {{0, 0}, {w, 0}, {w, h}, {0, h}};
+  m.max_tilt_deg = max_tilt_deg;
   compute_model_features(m);
   return m;
+}
+
+/// A bundle of `packs` box.png pictures side by side, as one model (a repeated design).
+inline Model bundle_model(int packs) {
+  std::vector<cv::Mat> row(packs, box_model().image);
+  cv::Mat picture;
+  cv::hconcat(row, picture);
+  return picture_model("bundle", picture);
 }
 
 inline const Detector& box_detector() {
