@@ -45,12 +45,8 @@ std::vector<cv::Point2f> carried(const std::vector<cv::Point2f>& points, const c
 
 GuidedMatcher::GuidedMatcher(const ModelScene& ms) : ms_(ms) {
   reach_ = kReachShare * std::sqrt(std::abs(cv::contourArea(ms.model.outline)));
+  model_grid_ = KeypointGrid(ms.model_features.keypoints, std::max(1.0, reach_));
   std::vector<cv::Point2f> at;
-  at.reserve(ms.model_features.keypoints.size());
-  for (const cv::KeyPoint& k : ms.model_features.keypoints)
-    at.push_back(k.pt);
-  model_grid_ = PointGrid(std::move(at), std::max(1.0, reach_));
-  at.clear();
   at.reserve(ms.scene.keypoints.size());
   for (const cv::KeyPoint& k : ms.scene.keypoints)
     at.push_back(k.pt);
@@ -76,12 +72,13 @@ std::vector<GuidedMatcher::Pair> GuidedMatcher::pairs(const cv::Matx33d& map,
     const cv::Point2d at(q[0] / q[2], q[1] / q[2]);
     int best = -1;
     double best_d = 0.0;
-    model_grid_.for_neighbours(at, [&](int k) {
+    for_alike(model_grid_, ks, at, near.angle, near.scale, [&](int k) {
       if (!placed_alike(ks, ms_.model_features.keypoints[k], at, radius, near.angle, near.scale))
         return;
       const double dist = distance_within(ms_.scene.descriptors, s, ms_.model_features.descriptors,
                                           k, limit, ms_.kind);
-      if (dist >= 0.0 && (best < 0 || dist < best_d)) {
+      // Ties go to the lower index: the grid visits in no set order.
+      if (dist >= 0.0 && (best < 0 || dist < best_d || (dist == best_d && k < best))) {
         best = k;
         best_d = dist;
       }

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "model_scene.hpp"
+#include "keypoint_grid.hpp"
 #include "point_grid.hpp"
 
 #include <pickdetect/features.hpp>
@@ -46,7 +47,8 @@ private:
                           const std::vector<cv::Point2f>& outline, double radius) const;
 
   const ModelScene& ms_;
-  PointGrid model_grid_, scene_grid_;
+  KeypointGrid model_grid_;
+  PointGrid scene_grid_;
   double reach_; ///< First pass's radius, model pixels.
 };
 

@@ -8,10 +8,12 @@
 #include <pickdetect/pose.hpp>
 #include <pickdetect/voting.hpp>
 
+#include "keypoint_grid.hpp"
 #include "point_grid.hpp"
 
 #include <opencv2/core.hpp>
 
+#include <utility>
 #include <vector>
 
 namespace pickdetect::detail {
@@ -68,11 +70,25 @@ double inlier_distance(const ModelScene& ms, double scale);
 constexpr double kInlierAngleDeg = 30.0;
 /// ...and its size ratio within this factor of the pose's scale.
 constexpr double kInlierScaleFactor = 1.5;
+static_assert(KeypointGrid::kAngleBinDeg >= kInlierAngleDeg,
+              "a model keypoint grid's searches must reach every rotation placed_alike takes");
 /// Whether model keypoint `km` lies within `radius` model pixels of `at` (where a pose carries
 /// scene keypoint `ks` back into the model) with the rotation and size the pose (`angle`,
 /// `scale`) predicts there, within kInlierAngleDeg and kInlierScaleFactor.
 bool placed_alike(const cv::KeyPoint& ks, const cv::KeyPoint& km, cv::Point2d at, double radius,
                   double angle, double scale);
+/// Calls visit(k) for every keypoint of `grid` (a model's) that may be placed_alike with scene
+/// keypoint `ks` carried back to `at` by a pose (`angle`, `scale`), within `radius` no wider
+/// than the grid's cell (and for some that are not: placed_alike decides).
+template <typename F>
+void for_alike(const KeypointGrid& grid, const cv::KeyPoint& ks, cv::Point2d at, double angle,
+               double scale, F&& visit) {
+  // The sizes kInlierScaleFactor allows, a hair wider than placed_alike's own rounding.
+  const double size = ks.size / scale, slack = 1.0 + 1e-4;
+  grid.for_neighbours(at, ks.angle - angle, static_cast<float>(size / kInlierScaleFactor / slack),
+                      static_cast<float>(size * kInlierScaleFactor * slack),
+                      std::forward<F>(visit));
+}
 /// A face seen up to about 70 degrees off its normal: the smaller scale of a map's linear part
 /// is at least this share of the larger.
 constexpr double kMaxForeshortening = 0.35;

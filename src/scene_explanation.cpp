@@ -4,6 +4,7 @@
 
 #include "descriptor_distance.hpp"
 #include "foreign_cover.hpp"
+#include "keypoint_grid.hpp"
 #include "model_scene.hpp"
 #include "point_grid.hpp"
 #include "polygon.hpp"
@@ -88,7 +89,7 @@ bool lies_on_kept(const std::vector<Instance>& instances, const std::vector<char
 
 /// The scene keypoints (indices) that instance `inst` of `model` explains.
 std::vector<int> explained(const Instance& inst, const cv::Rect2f& model_box,
-                           const PointGrid& model_grid, double model_radius,
+                           const KeypointGrid& model_grid, double model_radius,
                            const Features& model_features, const Features& scene,
                            const PointGrid& scene_grid, FeatureKind kind, int& on_outline) {
   on_outline = 0;
@@ -109,7 +110,7 @@ std::vector<int> explained(const Instance& inst, const cv::Rect2f& model_box,
       continue;
     ++on_outline;
     bool agrees = false;
-    model_grid.for_neighbours(at, [&](int k) {
+    for_alike(model_grid, ks, at, inst.angle, inst.scale, [&](int k) {
       if (agrees) // One model keypoint that agrees is enough.
         return;
       if (!placed_alike(ks, model_features.keypoints[k], at, model_radius, inst.angle, inst.scale))
@@ -235,15 +236,10 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
                          kPlaceShare * model_side(models[inst.model]));
     cell[inst.model] = std::max(cell[inst.model], radius[i]);
   }
-  std::vector<PointGrid> model_grid(models.size());
-  for (size_t m = 0; m < models.size(); ++m) {
-    if (!(cell[m] > 0.0))
-      continue;
-    std::vector<cv::Point2f> pts;
-    for (const cv::KeyPoint& k : models[m].features(kind).keypoints)
-      pts.push_back(k.pt);
-    model_grid[m] = PointGrid(std::move(pts), cell[m]);
-  }
+  std::vector<KeypointGrid> model_grid(models.size());
+  for (size_t m = 0; m < models.size(); ++m)
+    if (cell[m] > 0.0)
+      model_grid[m] = KeypointGrid(models[m].features(kind).keypoints, cell[m]);
   std::vector<std::vector<int>> explains(n);
   std::vector<int> on_outline(n, 0);
   for (size_t i = 0; i < n; ++i) {

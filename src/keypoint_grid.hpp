@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: LGPL-2.1-or-later
+// Internal to the core: keypoints bucketed by place and orientation, for the searches that pair
+// a scene keypoint with the model keypoints near where a pose carries it, turned as it predicts.
+#pragma once
+
+#include <opencv2/core.hpp>
+
+#include <algorithm>
+#include <array>
+#include <unordered_map>
+#include <vector>
+
+namespace pickdetect::detail {
+
+/// Keypoints bucketed in square cells `cell` pixels wide and, within a cell, in orientation bins
+/// kAngleBinDeg wide, each bin's keypoints in order of size. Only occupied cells are stored.
+/// Immutable once built.
+class KeypointGrid {
+public:
+  /// Width of an orientation bin (degrees): a search reaches one bin either side of the one its
+  /// orientation falls in, so every keypoint within this many degrees of it is visited.
+  static constexpr double kAngleBinDeg = 30.0;
+
+  KeypointGrid() = default;
+  KeypointGrid(const std::vector<cv::KeyPoint>& keypoints, double cell);
+
+  /// Calls visit(i) for every keypoint in the 3x3 cells around `at` whose orientation lies in
+  /// the bin of `angle` (degrees, any turn) or the bins either side and whose size lies within
+  /// [min_size, max_size] (a keypoint without a size, 0, is always visited): all keypoints
+  /// within one cell width of `at` and kAngleBinDeg of `angle` of such a size, and some farther
+  /// or more turned. No order is promised.
+  template <typename F>
+  void for_neighbours(cv::Point2d at, double angle, float min_size, float max_size,
+                      F&& visit) const {
+    const long cx = cell_index(at.x), cy = cell_index(at.y);
+    const int b = angle_bin(angle);
+    const int bins[3] = {(b + kAngleBins - 1) % kAngleBins, b, (b + 1) % kAngleBins};
+    for (long dy = -1; dy <= 1; ++dy)
+      for (long dx = -1; dx <= 1; ++dx) {
+        const auto it = cells_.find(pack(cx + dx, cy + dy));
+        if (it == cells_.end())
+          continue;
+        for (int bin : bins) {
+          const std::vector<Entry>& in = it->second[static_cast<size_t>(bin)];
+          auto e = in.begin();
+          for (; e != in.end() && !(e->size > 0.f); ++e) // Unsized first (sorted so).
+            visit(e->index);
+          for (e = std::lower_bound(e, in.end(), min_size, by_size);
+               e != in.end() && e->size <= max_size; ++e)
+            visit(e->index);
+        }
+      }
+  }
+
+private:
+  struct Entry {
+    float size;
+    int index;
+  };
+  static bool by_size(const Entry& e, float size) { return e.size < size; }
+  static constexpr int kAngleBins = static_cast<int>(360.0 / kAngleBinDeg);
+  static_assert(kAngleBins * kAngleBinDeg == 360.0, "orientation bins must tile the turn");
+
+  long cell_index(double v) const;
+  static int angle_bin(double angle);
+  static long long pack(long x, long y);
+
+  double cell_ = 1.0;
+  std::unordered_map<long long, std::array<std::vector<Entry>, kAngleBins>> cells_;
+};
+
+} // namespace pickdetect::detail
