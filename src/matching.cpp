@@ -44,14 +44,6 @@ constexpr float kRepeatOrbDistance = 20.f;
 /// two keypoints of one spot at other orientations are not taken for copies.
 constexpr float kRepeatGapSizes = 2.f;
 constexpr float kMinRepeatGapPx = 8.f;
-/// A part with more copies than this is a texture, not a design repeated a few times (a bundle
-/// of four packs: up to 32 places for a part of its print, its packs' own repeats and tilted
-/// views included). A match there would vote for every place it could mean and say little of
-/// any: a picture of hand-drawn strokes of one width (opencv-doc's pic3.png, 243 places for a
-/// quarter of its keypoints) made 10,000 matches of a belt frame's 3,500 keypoints and 1,300
-/// hypotheses. A texture's keypoints are matched as any other: the ratio test, their copies
-/// its rivals.
-constexpr size_t kMaxCopies = 32;
 /// Shared designs: a row's twins are the descriptors of other products within the SIFT
 /// repeat distance above, among its kTwinNeighbours nearest. A product whose twins cover at least
 /// kEditionShare of a model's rows is an edition of it (one design in other colours: the

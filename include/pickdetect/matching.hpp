@@ -40,6 +40,15 @@ enum class Ambiguity {
 /// share the search index.
 class Matcher {
 public:
+  /// A part with more copies than this is a texture, not a design repeated a few times (a bundle
+  /// of four packs: up to 32 places for a part of its print, its packs' own repeats and tilted
+  /// views included). A match there would vote for every place it could mean and say little of
+  /// any: a picture of hand-drawn strokes of one width (opencv-doc's pic3.png, 243 places for a
+  /// quarter of its keypoints) made 10,000 matches of a belt frame's 3,500 keypoints and 1,300
+  /// hypotheses. A texture's keypoints are matched as any other: the ratio test, their copies
+  /// its rivals.
+  static constexpr size_t kMaxCopies = 32;
+
   Matcher() = default;
   /// Matches against the models' features of the given kind. SIFT descriptors are searched
   /// with a kd-tree or by brute force; ORB's binary ones by brute force (Hamming distance).

@@ -145,8 +145,8 @@ TEST(Matcher, APartPrintedManyTimesOverIsATextureNotARepeatedDesign) {
       Matcher({texture}).match(scene.descriptors, 0.8, Search::BruteForce);
   EXPECT_LT(matches.size(), 2 * scene.keypoints.size());
   for (const auto& [feature, count] : matches_per_feature(matches))
-    ASSERT_LE(count, 32u) << "scene feature " << feature << " matched " << count
-                          << " times: a vote for each of the motif's places";
+    ASSERT_LE(count, Matcher::kMaxCopies) << "scene feature " << feature << " matched " << count
+                                          << " times: a vote for each of the motif's places";
 
   const Model bundle = test_scene::bundle_model(3);
   const Features seen = extract_features(bundle.image, cv::Mat(), FeatureKind::Sift);
