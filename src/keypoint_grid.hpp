@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <unordered_map>
 #include <vector>
 
@@ -28,20 +29,21 @@ public:
   /// the bin of `angle` (degrees, any turn) or the bins either side and whose size lies within
   /// [min_size, max_size] (a keypoint without a size, 0, is always visited): all keypoints
   /// within one cell width of `at` and kAngleBinDeg of `angle` of such a size, and some farther
-  /// or more turned. No order is promised.
+  /// or more turned. An angle that is no number asks for every turn. No order is promised.
   template <typename F>
   void for_neighbours(cv::Point2d at, double angle, float min_size, float max_size,
                       F&& visit) const {
     const long cx = cell_index(at.x), cy = cell_index(at.y);
-    const int b = angle_bin(angle);
-    const int bins[3] = {(b + kAngleBins - 1) % kAngleBins, b, (b + 1) % kAngleBins};
+    const bool every_turn = !std::isfinite(angle);
+    const int first = every_turn ? 0 : angle_bin(angle) + kAngleBins - 1;
+    const int bins = every_turn ? kAngleBins : 3;
     for (long dy = -1; dy <= 1; ++dy)
       for (long dx = -1; dx <= 1; ++dx) {
         const auto it = cells_.find(pack(cx + dx, cy + dy));
         if (it == cells_.end())
           continue;
-        for (int bin : bins) {
-          const std::vector<Entry>& in = it->second[static_cast<size_t>(bin)];
+        for (int j = 0; j < bins; ++j) {
+          const std::vector<Entry>& in = it->second[static_cast<size_t>((first + j) % kAngleBins)];
           auto e = in.begin();
           for (; e != in.end() && !(e->size > 0.f); ++e) // Unsized first (sorted so).
             visit(e->index);

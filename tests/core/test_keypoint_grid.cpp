@@ -65,6 +65,14 @@ TEST(KeypointGrid, VisitsEveryKeypointNearOfTheTurnAndSizeAskedOnce) {
       EXPECT_EQ(visits[1], 1);
     }
   }
+  // A pose whose turn is no number: every turn is asked for.
+  std::vector<int> visits(keypoints.size(), 0);
+  const cv::Point2d at(200.0, 150.0);
+  grid.for_neighbours(at, std::nan(""), 1.f, 40.f, [&](int i) { ++visits[i]; });
+  for (size_t i = 0; i < keypoints.size(); ++i)
+    if (std::hypot(keypoints[i].pt.x - at.x, keypoints[i].pt.y - at.y) <= cell) {
+      EXPECT_EQ(visits[i], 1) << "a turn that is no number missed keypoint " << i;
+    }
   int none = 0;
   KeypointGrid().for_neighbours({10.0, 10.0}, 0.0, 0.f, 100.f, [&](int) { ++none; });
   EXPECT_EQ(none, 0);
