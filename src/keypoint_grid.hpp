@@ -14,8 +14,8 @@
 namespace pickdetect::detail {
 
 /// Keypoints bucketed in square cells `cell` pixels wide and, within a cell, in orientation bins
-/// kAngleBinDeg wide, each bin's keypoints in order of size. Only occupied cells are stored.
-/// Immutable once built.
+/// kAngleBinDeg wide (those whose angle is no number apart, found at every turn), each bin's
+/// keypoints in order of size. Only occupied cells are stored. Immutable once built.
 class KeypointGrid {
 public:
   /// Width of an orientation bin (degrees): a search reaches one bin either side of the one its
@@ -42,15 +42,11 @@ public:
         const auto it = cells_.find(pack(cx + dx, cy + dy));
         if (it == cells_.end())
           continue;
-        for (int j = 0; j < bins; ++j) {
-          const std::vector<Entry>& in = it->second[static_cast<size_t>((first + j) % kAngleBins)];
-          auto e = in.begin();
-          for (; e != in.end() && !(e->size > 0.f); ++e) // Unsized first (sorted so).
-            visit(e->index);
-          for (e = std::lower_bound(e, in.end(), min_size, by_size);
-               e != in.end() && e->size <= max_size; ++e)
-            visit(e->index);
-        }
+        const Cell& c = it->second;
+        for (int j = 0; j < bins; ++j)
+          visit_sized(c.turned[static_cast<size_t>((first + j) % kAngleBins)], min_size, max_size,
+                      visit);
+        visit_sized(c.unturned, min_size, max_size, visit);
       }
   }
 
@@ -62,13 +58,29 @@ private:
   static bool by_size(const Entry& e, float size) { return e.size < size; }
   static constexpr int kAngleBins = static_cast<int>(360.0 / kAngleBinDeg);
   static_assert(kAngleBins * kAngleBinDeg == 360.0, "orientation bins must tile the turn");
+  struct Cell {
+    std::array<std::vector<Entry>, kAngleBins> turned;
+    std::vector<Entry> unturned; ///< Angle no number.
+  };
+
+  /// Visits the unsized entries of `in` (sorted by size: they come first) and those sized within
+  /// [min_size, max_size].
+  template <typename F>
+  static void visit_sized(const std::vector<Entry>& in, float min_size, float max_size, F& visit) {
+    auto e = in.begin();
+    for (; e != in.end() && !(e->size > 0.f); ++e)
+      visit(e->index);
+    for (e = std::lower_bound(e, in.end(), min_size, by_size); e != in.end() && e->size <= max_size;
+         ++e)
+      visit(e->index);
+  }
 
   long cell_index(double v) const;
   static int angle_bin(double angle);
   static long long pack(long x, long y);
 
   double cell_ = 1.0;
-  std::unordered_map<long long, std::array<std::vector<Entry>, kAngleBins>> cells_;
+  std::unordered_map<long long, Cell> cells_;
 };
 
 } // namespace pickdetect::detail

@@ -34,6 +34,9 @@ TEST(KeypointGrid, VisitsEveryKeypointNearOfTheTurnAndSizeAskedOnce) {
   keypoints[1].size = 0.f; // Unsized: visited whatever the size asked.
   keypoints[1].pt = {201.f, 151.f};
   keypoints[1].angle = 1.f;
+  keypoints[2].pt = {199.f, 149.f}; // A turn that is no number: placed_alike lets any through.
+  keypoints[2].angle = std::nanf("");
+  keypoints[2].size = 10.f;
   const double cell = 24.0;
   const KeypointGrid grid(keypoints, cell);
   for (int q = 0; q < 400; ++q) {
@@ -46,7 +49,7 @@ TEST(KeypointGrid, VisitsEveryKeypointNearOfTheTurnAndSizeAskedOnce) {
     grid.for_neighbours(at, angle, min_size, max_size, [&](int i) { ++visits[i]; });
     for (size_t i = 0; i < keypoints.size(); ++i) {
       const cv::KeyPoint& k = keypoints[i];
-      const double turn = turn_between(k.angle, angle);
+      const double turn = std::isnan(k.angle) ? 0.0 : turn_between(k.angle, angle);
       const bool sized = k.size >= min_size && k.size <= max_size;
       const bool near = std::hypot(k.pt.x - at.x, k.pt.y - at.y) <= cell;
       ASSERT_LE(visits[i], 1) << "keypoint " << i << " visited twice";
@@ -64,6 +67,12 @@ TEST(KeypointGrid, VisitsEveryKeypointNearOfTheTurnAndSizeAskedOnce) {
       EXPECT_EQ(visits[0], 1); // Across the seam, of the size asked.
       EXPECT_EQ(visits[1], 1);
     }
+  }
+  // A keypoint whose turn is no number is found at any turn asked.
+  for (const double angle : {0.0, 123.0, 250.0}) {
+    int found = 0;
+    grid.for_neighbours({200.0, 150.0}, angle, 5.f, 20.f, [&](int i) { found += i == 2; });
+    EXPECT_EQ(found, 1) << "a keypoint turned by no number, searched at " << angle << " degrees";
   }
   // A pose whose turn is no number: every turn is asked for.
   std::vector<int> visits(keypoints.size(), 0);
