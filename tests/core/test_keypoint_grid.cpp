@@ -3,6 +3,8 @@
 // asked, once, and passes over those turned or sized far otherwise.
 #include "../../src/keypoint_grid.hpp"
 
+#include <pickdetect/pose.hpp>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,15 +12,6 @@
 
 using namespace pickdetect;
 using detail::KeypointGrid;
-
-namespace {
-
-double turn_between(double a, double b) {
-  const double d = std::fabs(std::fmod(a - b, 360.0));
-  return d > 180.0 ? 360.0 - d : d;
-}
-
-} // namespace
 
 TEST(KeypointGrid, VisitsEveryKeypointNearOfTheTurnAndSizeAskedOnce) {
   cv::RNG rng(11);
@@ -49,7 +42,7 @@ TEST(KeypointGrid, VisitsEveryKeypointNearOfTheTurnAndSizeAskedOnce) {
     grid.for_neighbours(at, angle, min_size, max_size, [&](int i) { ++visits[i]; });
     for (size_t i = 0; i < keypoints.size(); ++i) {
       const cv::KeyPoint& k = keypoints[i];
-      const double turn = std::isnan(k.angle) ? 0.0 : turn_between(k.angle, angle);
+      const double turn = std::isnan(k.angle) ? 0.0 : angle_difference(k.angle, angle);
       const bool sized = k.size >= min_size && k.size <= max_size;
       const bool near = std::hypot(k.pt.x - at.x, k.pt.y - at.y) <= cell;
       ASSERT_LE(visits[i], 1) << "keypoint " << i << " visited twice";
