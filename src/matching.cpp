@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <mutex>
 
@@ -54,6 +55,38 @@ constexpr double kEditionShare = 0.5;
 /// Leaves the twins' kd-tree search visits: four times the matching's, as twins lie farther
 /// apart than the matches the ratio test keeps (32 missed some at 73-98 of the 100).
 constexpr int kTwinChecks = 128;
+
+/// The k nearest descriptors FLANN's search has found, kept in the caller's row, ordered by
+/// distance and, at equal distance, by row: the order of FLANN's own KNNUniqueResultSet, which
+/// cv::flann::Index::knnSearch uses and which allocates a node of a std::set for each
+/// candidate (a sixth of the matching stage at 17 neighbours and 32 leaves, docs/performance.md).
+class NearestRows : public cvflann::ResultSet<float> {
+public:
+  NearestRows(int k, int* rows, float* distances) : k_(k), rows_(rows), distances_(distances) {}
+  bool full() const override { return count_ == k_; }
+  float worstDist() const override {
+    return count_ == k_ ? distances_[k_ - 1] : std::numeric_limits<float>::max();
+  }
+  void addPoint(float distance, int row) override {
+    if (distance >= worstDist())
+      return;
+    int j = count_ < k_ ? count_++ : k_ - 1;
+    for (; j > 0 &&
+           (distances_[j - 1] > distance || (distances_[j - 1] == distance && rows_[j - 1] > row));
+         --j) {
+      distances_[j] = distances_[j - 1];
+      rows_[j] = rows_[j - 1];
+    }
+    distances_[j] = distance;
+    rows_[j] = row;
+  }
+
+private:
+  int k_;
+  int* rows_;
+  float* distances_;
+  int count_ = 0;
+};
 
 int find_root(std::vector<int>& parent, int i) {
   while (parent[i] != i)
@@ -113,6 +146,11 @@ std::vector<cv::Point2f> shifts_of(const std::vector<cv::Point2f>& pairs, int ro
 
 } // namespace
 
+struct Matcher::KdTree {
+  cv::Mat data; ///< The descriptors the tree indexes (FLANN keeps only a pointer to them).
+  std::unique_ptr<cvflann::KDTreeIndex<cvflann::L2<float>>> tree;
+};
+
 Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kind) {
   std::vector<cv::Mat> parts;
   for (size_t m = 0; m < models.size(); ++m) {
@@ -137,8 +175,13 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
   if (kind == FeatureKind::Sift && descriptors_.rows >= 2) {
     std::lock_guard<std::mutex> hold(flann_build_lock());
     cvflann::seed_random(kKdSeed);
-    index_ = std::make_shared<cv::flann::Index>(
-        descriptors_, cv::flann::KDTreeIndexParams(kKdTrees), cvflann::FLANN_DIST_L2);
+    auto index = std::make_shared<KdTree>();
+    index->data = descriptors_;
+    const cvflann::Matrix<float> rows(index->data.ptr<float>(), index->data.rows, index->data.cols);
+    index->tree = std::make_unique<cvflann::KDTreeIndex<cvflann::L2<float>>>(
+        rows, cvflann::KDTreeIndexParams(kKdTrees));
+    index->tree->buildIndex();
+    index_ = std::move(index);
   }
   find_repeats(models);
   find_shared_designs();
@@ -319,11 +362,11 @@ void Matcher::nearest(const cv::Mat& queries, int k, Search search, cv::Mat& ind
   indices.create(n, k, CV_32S);
   distances.create(n, k, CV_32F);
   if (kind_ == FeatureKind::Sift && search == Search::KdTree && index_) {
+    const cvflann::SearchParams params(checks);
     cv::parallel_for_(cv::Range(0, (n + kSearchBlock - 1) / kSearchBlock), [&](const cv::Range& r) {
-      for (int b = r.start; b < r.end; ++b) {
-        const cv::Range rows(b * kSearchBlock, std::min(n, (b + 1) * kSearchBlock));
-        cv::Mat idx = indices.rowRange(rows), dist = distances.rowRange(rows);
-        index_->knnSearch(queries.rowRange(rows), idx, dist, k, cv::flann::SearchParams(checks));
+      for (int i = r.start * kSearchBlock; i < std::min(n, r.end * kSearchBlock); ++i) {
+        NearestRows found(k, indices.ptr<int>(i), distances.ptr<float>(i));
+        index_->tree->findNeighbors(found, queries.ptr<float>(i), params);
       }
     });
     cv::sqrt(distances, distances); // FLANN gives squared L2

@@ -9,10 +9,6 @@
 #include <memory>
 #include <vector>
 
-namespace cv::flann {
-class Index;
-}
-
 namespace pickdetect {
 
 /// What the matching does with a scene feature that fits several models about equally well
@@ -96,7 +92,8 @@ private:
   /// Model index -> its product (the first model of its name): a feature that fits only views
   /// of one product is no look-alike's, and its matches are not `shared`.
   std::vector<int> product_;
-  std::shared_ptr<cv::flann::Index> index_;
+  struct KdTree; ///< FLANN's kd-tree over descriptors_ (SIFT only).
+  std::shared_ptr<const KdTree> index_;
   std::vector<int> group_;               ///< Row -> its repeat group (itself when unrepeated).
   std::vector<std::vector<int>> copies_; ///< Row -> the rows of its group (empty: none).
   std::vector<std::vector<cv::Point2f>> shifts_; ///< Model index -> repeat_shifts.
