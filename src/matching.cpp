@@ -59,7 +59,8 @@ constexpr int kTwinChecks = 128;
 /// The k nearest descriptors FLANN's search has found, kept in the caller's row, ordered by
 /// distance and, at equal distance, by row: the order of FLANN's own KNNUniqueResultSet, which
 /// cv::flann::Index::knnSearch uses and which allocates a node of a std::set for each
-/// candidate (a sixth of the matching stage at 17 neighbours and 32 leaves, docs/performance.md).
+/// candidate (a seventh of the matching stage at 17 neighbours and 32 leaves,
+/// docs/performance.md).
 class NearestRows : public cvflann::ResultSet<float> {
 public:
   NearestRows(int k, int* rows, float* distances) : k_(k), rows_(rows), distances_(distances) {}
