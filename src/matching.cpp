@@ -60,7 +60,8 @@ constexpr int kTwinChecks = 128;
 /// distance and, at equal distance, by row: the order of FLANN's own KNNUniqueResultSet, which
 /// cv::flann::Index::knnSearch uses and which allocates a node of a std::set for each
 /// candidate (a seventh of the matching stage at 17 neighbours and 32 leaves,
-/// docs/performance.md).
+/// docs/performance.md). FLANN's array-based KNNResultSet would not allocate either, but it
+/// orders equal distances by arrival, so a tie could pick another nearest row than before.
 class NearestRows : public cvflann::ResultSet<float> {
 public:
   NearestRows(int k, int* rows, float* distances) : k_(k), rows_(rows), distances_(distances) {}
