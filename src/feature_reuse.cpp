@@ -184,11 +184,34 @@ bool ecc_shift(const cv::Mat& from, const cv::Mat& to, const std::vector<cv::Poi
   }
 }
 
-/// Whether enough of the instance is in the frame to follow it by its motion.
-bool in_view(const Instance& instance, const cv::Size& size) {
+/// Whether `step` carries an object whose box is `box` out of the frame: less of it in view.
+bool moves_out(const cv::Rect& box, const cv::Point2f& step, const cv::Size& size) {
+  const cv::Rect frame(cv::Point(0, 0), size);
+  const cv::Rect next = box + cv::Point(cvRound(step.x), cvRound(step.y));
+  return (next & frame).area() < (box & frame).area();
+}
+
+/// Whether enough of the instance is in the frame to follow it by its motion: kLeastInFrame of
+/// its box, or any part ECC can measure of one leaving the frame (its last `step` carries it
+/// out). What is left of a leaving object is followed out rather than extracted again each
+/// frame: found when more of it was in view, its keypoints are those of then.
+bool in_view(const Instance& instance, const cv::Size& size,
+             const std::optional<cv::Point2f>& step) {
   const cv::Rect whole = box_of(instance.outline);
   const cv::Rect box = whole & cv::Rect(cv::Point(0, 0), size);
-  return box.width >= 16 && box.height >= 16 && box.area() >= kLeastInFrame * whole.area();
+  if (box.width < 16 || box.height < 16)
+    return false;
+  return box.area() >= kLeastInFrame * whole.area() || (step && moves_out(whole, *step, size));
+}
+
+/// Whether an object at `outline` in the last frame that moved by `shift` is leaving the frame
+/// with less than kLeastInFrame of its box in view.
+bool leaves(const std::vector<cv::Point2f>& outline, const cv::Point2f& shift,
+            const cv::Size& size) {
+  const cv::Rect before = box_of(outline);
+  const cv::Rect now = before + cv::Point(cvRound(shift.x), cvRound(shift.y));
+  const int in_view = (now & cv::Rect(cv::Point(0, 0), size)).area();
+  return in_view > 0 && moves_out(before, shift, size) && in_view < kLeastInFrame * now.area();
 }
 
 /// How `instance` moved from `last` to `grey`: ECC on its outline's pixels, started from
@@ -235,6 +258,8 @@ bool inside_outline(const Instance& instance, const cv::Point2f& p) {
 void FeatureReuse::reset() {
   detector_ = nullptr;
   motions_.clear();
+  leaving_.clear();
+  leaving_motions_.clear();
   features_ = Features();
   matches_.clear();
   detection_ = Detection();
@@ -279,6 +304,8 @@ Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& gr
   grey.copyTo(last_grey_);
   grey.copyTo(whole_grey_);
   motions_.assign(detection_.instances.size(), Motion{std::nullopt, cv::Point2f(), cv::Point2f()});
+  leaving_.clear();
+  leaving_motions_.clear();
   since_whole_ = 0;
   last_ = ReuseStats{static_cast<int>(features_.keypoints.size()), 0, 1.0, true, false};
   return detection_;
@@ -325,40 +352,60 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   const cv::Rect frame(cv::Point(0, 0), grey.size());
   // Each instance's motion, followed on its own pixels: the instances in parallel (ECC is most
   // of a belt frame's cost), each into its own slot, gathered in order below.
-  std::vector<std::optional<Moved>> follow(detection_.instances.size());
-  std::vector<char> still(detection_.instances.size(), 0);
+  // The last frame's instances, then what is left in view of those leaving it (not reported).
+  const size_t found = detection_.instances.size();
+  auto carrier_at = [&](size_t n) -> const Instance& {
+    return n < found ? detection_.instances[n] : leaving_[n - found];
+  };
+  auto motion_at = [&](size_t n) -> const Motion& {
+    return n < found ? motions_[n] : leaving_motions_[n - found];
+  };
+  // How an instance moved since the last frame. Measured from the whole frame its keypoints
+  // came from when it was followed from there, so that the small errors of each step do not add
+  // up; else from the last frame.
+  auto measure_shift = [&](const Instance& instance, const Motion& motion, cv::Point2f& shift,
+                           std::optional<cv::Point2f>& since_whole) {
+    if (motion.since_whole && motion.step) {
+      std::vector<cv::Point2f> there = instance.outline;
+      for (cv::Point2f& p : there)
+        p -= *motion.since_whole;
+      cv::Point2f total;
+      if (ecc_shift(whole_grey_, grey, there, *motion.since_whole + *motion.step, kPredictedMargin,
+                    total)) {
+        shift = total - *motion.since_whole;
+        since_whole = total;
+        return true;
+      }
+    }
+    if (!step_shift(last_grey_, grey, instance, motion.step, shift))
+      return false;
+    if (motion.since_whole)
+      since_whole = *motion.since_whole + shift;
+    return true;
+  };
+  std::vector<std::optional<Moved>> follow(found + leaving_.size());
+  std::vector<char> still(follow.size(), 0);
   cv::parallel_for_(cv::Range(0, static_cast<int>(follow.size())), [&](const cv::Range& range) {
     for (int i = range.start; i < range.end; ++i) {
       const size_t n = static_cast<size_t>(i);
-      const Instance& instance = detection_.instances[n];
+      const Instance& instance = carrier_at(n);
       const cv::Rect box = box_of(instance.outline);
       const cv::Rect before = box & frame;
       if (cv::countNonZero(changed(block_box(before))) == 0) {
         still[n] = 1;
         continue; // Still: its keypoints stay as they are.
       }
-      if (!in_view(instance, grey.size()))
-        continue; // Its blocks are extracted again.
-      // Measured from the whole frame its keypoints came from when it was followed from there,
-      // so that the small errors of each step do not add up; else from the last frame.
-      const Motion& motion = motions_[n];
-      cv::Point2f shift, total;
+      const Motion& motion = motion_at(n);
+      cv::Point2f shift;
       std::optional<cv::Point2f> since_whole;
-      if (motion.since_whole && motion.step) {
-        std::vector<cv::Point2f> there = instance.outline;
-        for (cv::Point2f& p : there)
-          p -= *motion.since_whole;
-        if (ecc_shift(whole_grey_, grey, there, *motion.since_whole + *motion.step,
-                      kPredictedMargin, total)) {
-          shift = total - *motion.since_whole;
-          since_whole = total;
-        }
-      }
-      if (!since_whole) {
-        if (!step_shift(last_grey_, grey, instance, motion.step, shift))
+      if (!in_view(instance, grey.size(), motion.step)) {
+        // The last sliver in view of one leaving the frame, too narrow to measure (and to
+        // find anything on): moved by its last step.
+        if (n < found || !motion.step || !moves_out(box, *motion.step, grey.size()))
           continue; // Its blocks are extracted again.
-        if (motion.since_whole)
-          since_whole = *motion.since_whole + shift;
+        shift = *motion.step;
+      } else if (!measure_shift(instance, motion, shift, since_whole)) {
+        continue; // Its blocks are extracted again.
       }
       // What was in view moved to `after`; what comes into view beside it is extracted.
       const cv::Rect after = (before + cv::Point(cvRound(shift.x), cvRound(shift.y))) & frame;
@@ -371,9 +418,11 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       follow[n] = Moved{&instance, shift, before, after, since_whole, edge, renew};
     }
   });
-  for (const std::optional<Moved>& m : follow)
-    if (m) {
+  size_t moved_found = 0; // Of them, the last frame's instances (the leaving ones follow).
+  for (size_t n = 0; n < follow.size(); ++n)
+    if (const std::optional<Moved>& m = follow[n]) {
       moved.push_back(*m);
+      moved_found += n < found ? 1 : 0;
       explained(block_box(m->before)).setTo(255);
       explained(block_box(m->after)).setTo(255);
     }
@@ -393,9 +442,10 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       }
   }
   const cv::Mat unexplained = (changed & (explained == 0)) | renewed;
+  // The belt and its blur from the instances found (what is left of leaving ones is too little).
   std::vector<std::pair<const Instance*, cv::Point2f>> shifts;
-  for (const Moved& m : moved)
-    shifts.emplace_back(m.instance, m.shift);
+  for (size_t i = 0; i < moved_found; ++i)
+    shifts.emplace_back(moved[i].instance, moved[i].shift);
   measure_belt(detector, grey, shifts);
   const cv::Point2f blur = belt_blur();
 
@@ -507,6 +557,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   // that lay still keeps its own; one that was not followed (too little of it in view, or its
   // step not measured) was found again from keypoints extracted in this frame: its motion
   // starts here, not from the whole frame.
+  const size_t followed = moved.size();
   for (size_t n = 0; n < last_instances.size(); ++n)
     if (std::none_of(moved.begin(), moved.end(),
                      [&](const Moved& m) { return m.instance == &last_instances[n]; }))
@@ -518,18 +569,48 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
                        still[n] ? last_motions[n].since_edge : cv::Point2f(),
                        false});
   motions_.assign(detection_.instances.size(), Motion{});
+  std::vector<char> found_again(moved.size(), 0);
   for (size_t n = 0; n < detection_.instances.size(); ++n) {
     const Instance& now = detection_.instances[n];
     const cv::Rect box = box_of(now.outline);
     double nearest = kSameInstanceShare * std::hypot(box.width, box.height);
-    for (const Moved& m : moved) {
+    std::optional<size_t> from;
+    for (size_t i = 0; i < moved.size(); ++i) {
+      const Moved& m = moved[i];
       const double d = cv::norm(m.instance->center + m.shift - now.center);
       if (m.instance->model == now.model && d < nearest) {
         nearest = d;
+        from = i;
         motions_[n] = Motion{m.shift, m.since_whole, m.renew ? cv::Point2f() : m.since_edge};
       }
     }
+    if (from)
+      found_again[*from] = 1;
   }
+  // Those followed here and not found again that are leaving the frame, too little of them in
+  // view to be found: what is left of them in view is followed out, not extracted each frame.
+  std::vector<Instance> leaving;
+  std::vector<Motion> leaving_motions;
+  for (size_t i = 0; i < followed; ++i) {
+    const Moved& m = moved[i];
+    if (found_again[i] || !leaves(m.instance->outline, m.shift, grey.size()))
+      continue;
+    Instance left; // Where it is now: what following it needs.
+    left.model = m.instance->model;
+    left.outline = m.instance->outline;
+    for (cv::Point2f& p : left.outline)
+      p += m.shift;
+    left.center = m.instance->center + m.shift;
+    leaving.push_back(std::move(left));
+    leaving_motions.push_back(Motion{m.shift, m.since_whole, m.since_edge});
+  }
+  for (size_t n = found; n < still.size(); ++n)
+    if (still[n]) { // Lying still where it was: it stays.
+      leaving.push_back(leaving_[n - found]);
+      leaving_motions.push_back(leaving_motions_[n - found]);
+    }
+  leaving_ = std::move(leaving);
+  leaving_motions_ = std::move(leaving_motions);
   last_ = ReuseStats{static_cast<int>(fresh.keypoints.size()), offset,
                      cropped / static_cast<double>(grey.total()), false, false};
   return detection_;

@@ -40,6 +40,8 @@ struct ReuseStats {
 /// An instance coming into view across the frame's edge rides in with the keypoints it had;
 /// each time 0.4 more of its box is in view than when they were extracted, what came into view
 /// since, and its keypoints whose windows the edge cut, are extracted again.
+/// An instance riding out across the frame's edge is followed out, also once it is no longer
+/// found: what is left of it in view is never extracted again.
 /// The matching runs on the new keypoints only; voting, poses, look-alikes and occlusion run on all
 /// of them, on the frame's pixels. A frame in which nothing changed gets the last detection.
 /// Every `whole_interval`-th frame, a frame of another size, contrast threshold, detector or
@@ -94,6 +96,11 @@ private:
     cv::Point2f since_edge;
   };
   std::vector<Motion> motions_;
+  /// What is left in view of the last frame's instances leaving the frame that were not found
+  /// again (too little of them in view), with their motions: followed out of the frame, never
+  /// reported.
+  std::vector<Instance> leaving_;
+  std::vector<Motion> leaving_motions_;
   /// The belt's motion in the last frame (frame pixels), when the instances that moved there
   /// moved together.
   std::optional<cv::Point2f> belt_step_;

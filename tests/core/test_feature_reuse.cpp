@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // FeatureReuse (the element's full-detection-interval): a still scene costs no extraction, a
 // moving box is found where whole-frame detection finds it, a box coming into view is found
-// without a whole frame, a belt's motion blur is undone.
+// without a whole frame, a belt's motion blur is undone, a box leaving the frame is followed out.
 #include "../support/box.hpp"
 #include "common/scene.hpp"
 
@@ -260,4 +260,40 @@ TEST(FeatureReuse, BoxComingIntoViewIsExtractedAsItComesIn) {
   // frame). Across the left edge, 12 px a frame; across the bottom one, going up and left.
   expect_extracted_as_it_comes_in({-60.f, 480.f}, {12.f, 0.f}, 22);
   expect_extracted_as_it_comes_in({520.f, 760.f}, {-4.f, -12.f}, 15);
+}
+
+TEST(FeatureReuse, BoxLeavingAcrossTheEdgeIsFollowedOutNotExtractedAgain) {
+  // A box (box.png at 0.55: 178 x 123 px) rides out across the right edge, 12 px a frame, beside
+  // a still one. Once less than kLeastInFrame (0.3) of it is in view it is no longer found, but
+  // what is left of it in view still moves with the belt: it is followed out by its motion, and
+  // no frame needs SIFT (before: the blocks it changed were extracted again in every frame till
+  // it was gone, for nothing: too little of it to find).
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(60);
+  const Pose still{{300.f, 250.f}, 100.0, 0.55};
+  for (int frame = 0; frame < 16; ++frame) {
+    const Pose riding{{880.f + 12.f * frame, 480.f}, 0.0, 0.55};
+    const cv::Mat grey = scene_with({riding, still}, frame + 1);
+    const Detection got = reuse.detect(detector, grey, Settings());
+    const ReuseStats stats = reuse.last();
+    if (frame == 0)
+      continue;
+    EXPECT_FALSE(stats.whole) << "frame " << frame;
+    EXPECT_EQ(stats.extracted_share, 0.0) << "frame " << frame;
+    // Found while half of it is in view, where the whole frame finds it; gone once out of view.
+    const float in_view = std::clamp((960.f - (riding.center.x - 89.f)) / 178.f, 0.f, 1.f);
+    if (in_view >= 0.5f) {
+      const Detection want = detector.detect(grey, Settings());
+      ASSERT_EQ(got.instances.size(), want.instances.size()) << "frame " << frame;
+      for (const Instance& w : want.instances)
+        EXPECT_TRUE(
+            std::any_of(got.instances.begin(), got.instances.end(),
+                        [&](const Instance& g) { return cv::norm(g.center - w.center) <= 1.0; }))
+            << "frame " << frame << ": nothing found at (" << w.center.x << ", " << w.center.y
+            << ")";
+    }
+    if (in_view == 0.f) {
+      EXPECT_EQ(got.instances.size(), 1u) << "frame " << frame;
+    }
+  }
 }
