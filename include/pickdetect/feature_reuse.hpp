@@ -41,7 +41,8 @@ struct ReuseStats {
 /// each time 0.4 more of its box is in view than when they were extracted, what came into view
 /// since, and its keypoints whose windows the edge cut, are extracted again.
 /// An instance riding out across the frame's edge is followed out, also once it is no longer
-/// found: what is left of it in view is never extracted again.
+/// found: what is left of it in view moves by its motion instead of being extracted again each
+/// frame (unless ECC no longer follows it).
 /// The matching runs on the new keypoints only; voting, poses, look-alikes and occlusion run on all
 /// of them, on the frame's pixels. A frame in which nothing changed gets the last detection.
 /// Every `whole_interval`-th frame, a frame of another size, contrast threshold, detector or
