@@ -276,8 +276,12 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
         // A face far off the picture plane: a similarity fits only a part of it, whatever it
         // is refitted on. Its hypothesis still stands if an affine map gathers its votes.
         if (!refine_foreshortened(ms, pose, s.allow_scale, members, claimed, in, h,
-                                  std::max(fewest, kMinForeshortenedFewest)))
+                                  std::max(fewest, kMinForeshortenedFewest))) {
+          // Too few of its votes agree on one pose: for a model of faint print, a hypothesis of
+          // two or three votes that one stray vote made look like more (below).
+          weak.push_back(&members);
           continue;
+        }
         place(inst, ms.model, h);
         // Votes left over from a face already found (its similarity took only a part of
         // them) are that face again, not another.
@@ -309,11 +313,12 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
     return found;
   // A model of faint print (few keypoints, found at a lowered threshold: a white glossy carton)
   // leaves a face tilted far off the picture plane or under glare with two or three votes: most
-  // of its matches fail the ratio test. Such hypotheses are completed by guided matching where
-  // the frame's keypoints bear them out. Models of rich print keep the ratio test's word: in
-  // their clutter (the dev sets) guided matching built ghosts of five to ten pairs.
-  // Its grids over every model and frame keypoint are built on the first hypothesis that
-  // needs them: most frames have none.
+  // of its matches fail the ratio test; a stray vote among them (a match elsewhere whose vote
+  // for the centre lands near theirs) may make a hypothesis of min_matches votes that no pose
+  // fits. Such hypotheses are completed by guided matching where the frame's keypoints bear
+  // them out. Models of rich print keep the ratio test's word: in their clutter (the dev sets)
+  // guided matching built ghosts of five to ten pairs. Its grids over every model and frame
+  // keypoint are built on the first hypothesis that needs them: most frames have none.
   std::optional<GuidedMatcher> guided;
   auto matcher = [&]() -> const GuidedMatcher& {
     if (!guided)

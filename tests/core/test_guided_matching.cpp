@@ -235,3 +235,33 @@ TEST(GuidedMatching, AFaintFaceFoundOnABunchOfMatchesIsCompleted) {
   EXPECT_FALSE(inst.pickable);
   expect_on_face(model, inst);
 }
+
+TEST(GuidedMatching, AFaintFaceOfThreeMatchesAndAStrayVoteIsCompleted) {
+  // Three matches pass the ratio test on the face, and a fourth scene keypoint with a picture
+  // keypoint's own descriptor lies 12 px off that keypoint's place (a match on something else
+  // whose vote for the centre lands near theirs): four votes, as many as min_matches, that no
+  // pose fits. Without the stray vote the three are completed by guided matching; with it, so
+  // they are still.
+  const Model model = faint_box_model();
+  const cv::Point2f c = model.principal_points[0];
+  const std::vector<int> chosen = grid_keypoints(model);
+  std::vector<int> by_row = chosen;
+  std::sort(by_row.begin(), by_row.end(), [&](int a, int b) {
+    return std::abs(model.sift.keypoints[a].pt.y - c.y) <
+           std::abs(model.sift.keypoints[b].pt.y - c.y);
+  });
+  const std::vector<int> exact(by_row.begin(), by_row.begin() + 4);
+  Features scene = placed_keypoints(model, chosen, exact, kAt);
+  const size_t stray =
+      static_cast<size_t>(std::find(chosen.begin(), chosen.end(), exact[3]) - chosen.begin());
+  scene.keypoints[stray].pt += cv::Point2f(0.f, 12.f);
+
+  const Detection d = Detector({model}).detect(scene, cv::Size(640, 480), Settings());
+  EXPECT_EQ(d.matches, 4) << "the premise: four matches pass the ratio test";
+  ASSERT_EQ(d.instances.size(), 1u) << "the face is completed from its keypoints' descriptors";
+  const Instance& inst = d.instances[0];
+  EXPECT_GE(inst.matches, 10) << "the face's keypoints, the stray one aside, support it";
+  EXPECT_TRUE(inst.guided);
+  EXPECT_FALSE(inst.pickable);
+  expect_on_face(model, inst);
+}
