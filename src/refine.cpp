@@ -275,6 +275,12 @@ bool refine_foreshortened(const ModelScene& ms, const Similarity& pose, bool all
       break;
     current = std::move(again);
   }
+  // Foreshortening shrinks a face along one axis, never enlarges it: a map that shows the face
+  // larger than its inliers' keypoint sizes say (beyond their tolerance, kInlierScaleFactor)
+  // gathers matches of a repeated part spread over neighbouring faces (a band that a packed row
+  // of one product shares).
+  if (similarity_near(map, ms.model.principal_points[0]).scale > own.scale * kInlierScaleFactor)
+    return false;
   h = map;
   in = std::move(current);
   return true;

@@ -19,6 +19,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -217,6 +218,73 @@ TEST(SceneExplanation, AFewAgreeingKeypointsInClutterDoNotMakeAnInstance) {
   ASSERT_EQ(instances.size(), 1u) << "the pose over the clutter must be dropped, the box kept";
   EXPECT_LT(cv::norm(instances[0].center - poses[0].center), 1.5)
       << "kept: (" << instances[0].center.x << ", " << instances[0].center.y << ")";
+}
+
+TEST(SceneExplanation, AnAffineMapLargerThanItsKeypointsSizesDoesNotPlaceAFace) {
+  // A face of the box at scale 0.6: six of its picture's keypoints where its similarity puts
+  // them. Among them, nine more keypoints of the picture of this face's size (a band the
+  // box shares with its neighbours in a packed row) lie where a map 1.67 times as large puts
+  // them: more than the face's own, and one affine map carries them all. A face is never seen
+  // larger than its keypoints' sizes say (foreshortening shrinks one axis): the similarity of
+  // the six places it.
+  const Model& model = box_model();
+  const size_t own =
+      extract_features(model.image, model.mask, FeatureKind::Sift, model.contrast_threshold)
+          .keypoints.size(); // the picture's own come first, then its tilted views'
+  const cv::Point2f centre = model.principal_points[0];
+  const cv::Point2f at(320.f, 240.f);
+  const float scale = 0.6f, larger = 1.0f;
+  // The strongest keypoint in each cell of a grid over the picture's inner part, `columns` by
+  // `rows`, each kept once.
+  std::vector<int> taken;
+  auto strongest = [&](int columns, int rows, float part) {
+    std::vector<int> out;
+    const float w = model.image.cols * part, h = model.image.rows * part;
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < columns; ++c) {
+        const float x0 = centre.x - w / 2 + w * c / columns, y0 = centre.y - h / 2 + h * r / rows;
+        int best = -1;
+        for (size_t i = 0; i < own; ++i) {
+          const cv::KeyPoint& k = model.sift.keypoints[i];
+          if (k.pt.x >= x0 && k.pt.x < x0 + w / columns && k.pt.y >= y0 && k.pt.y < y0 + h / rows &&
+              std::find(taken.begin(), taken.end(), static_cast<int>(i)) == taken.end() &&
+              (best < 0 || k.response > model.sift.keypoints[static_cast<size_t>(best)].response))
+            best = static_cast<int>(i);
+        }
+        if (best >= 0) {
+          out.push_back(best);
+          taken.push_back(best);
+        }
+      }
+    return out;
+  };
+  const std::vector<int> face = strongest(3, 2, 0.9f);
+  const std::vector<int> band = strongest(3, 3, 0.8f);
+  ASSERT_EQ(face.size(), 6u);
+  ASSERT_EQ(band.size(), 9u);
+  Features scene;
+  auto place_at = [&](int i, float spread) {
+    cv::KeyPoint k = model.sift.keypoints[static_cast<size_t>(i)];
+    k.pt = at + (k.pt - centre) * spread;
+    k.size *= scale;
+    scene.keypoints.push_back(k);
+    scene.descriptors.push_back(model.sift.descriptors.row(i));
+  };
+  for (int i : face)
+    place_at(i, scale);
+  for (int i : band)
+    place_at(i, larger);
+
+  const Detection d = box_detector().detect(scene, cv::Size(640, 480), Settings());
+  const Instance* inst = nearest(d.instances, at);
+  ASSERT_NE(inst, nullptr) << "the face, from " << d.matches << " matches";
+  EXPECT_NEAR(inst->scale, scale, 0.05);
+  for (size_t k = 0; k < model.principal_points.size(); ++k) {
+    const cv::Point2f truth = at + (model.principal_points[k] - centre) * scale;
+    EXPECT_LT(cv::norm(inst->points[k] - truth), 1.0)
+        << "principal point " << k << ": expected (" << truth.x << ", " << truth.y << "), got ("
+        << inst->points[k].x << ", " << inst->points[k].y << ")";
+  }
 }
 
 } // namespace
