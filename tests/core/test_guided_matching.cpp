@@ -3,6 +3,7 @@
 // steep tilt: the rest come out as near another part of the picture as their own) is completed
 // from the keypoints its pose predicts.
 #include "../support/box.hpp"
+#include "../support/model_keypoints.hpp"
 
 #include <pickdetect/pickdetect.hpp>
 
@@ -17,6 +18,8 @@
 using namespace pickdetect;
 using pickdetect::test_scene::box_model;
 using pickdetect::test_scene::faint_box_model;
+using pickdetect::test_scene::own_keypoints;
+using pickdetect::test_scene::strongest_own_keypoint;
 
 namespace {
 
@@ -38,28 +41,16 @@ cv::Point2f on_face(const Model& model, cv::Point2f p, cv::Point2f at = kAt) {
   return at + cv::Point2f(static_cast<float>(q[0]), static_cast<float>(q[1]));
 }
 
-/// How many of the model's SIFT keypoints are the picture's own: they come first, then its
-/// tilted views'.
-size_t own_keypoints(const Model& model) {
-  return extract_features(model.image, model.mask, FeatureKind::Sift, model.contrast_threshold)
-      .keypoints.size();
-}
-
 /// The strongest of the picture's own keypoints in each cell of a 4 x 3 grid.
 std::vector<int> grid_keypoints(const Model& model) {
-  const size_t own = own_keypoints(model);
   std::vector<int> chosen;
   for (int row = 0; row < 3; ++row)
     for (int column = 0; column < 4; ++column) {
       const float x0 = model.image.cols * column / 4.f, x1 = model.image.cols * (column + 1) / 4.f;
       const float y0 = model.image.rows * row / 3.f, y1 = model.image.rows * (row + 1) / 3.f;
-      int best = -1;
-      for (size_t i = 0; i < own; ++i) {
-        const cv::KeyPoint& k = model.sift.keypoints[i];
-        if (k.pt.x >= x0 && k.pt.x < x1 && k.pt.y >= y0 && k.pt.y < y1 &&
-            (best < 0 || k.response > model.sift.keypoints[static_cast<size_t>(best)].response))
-          best = static_cast<int>(i);
-      }
+      const int best = strongest_own_keypoint(model, [&](int, const cv::KeyPoint& k) {
+        return k.pt.x >= x0 && k.pt.x < x1 && k.pt.y >= y0 && k.pt.y < y1;
+      });
       if (best >= 0)
         chosen.push_back(best);
     }
@@ -200,11 +191,8 @@ TEST(GuidedMatching, AFaintFaceFoundOnABunchOfMatchesIsCompleted) {
   // Guided matching from that pose pairs the rest of the face.
   const Model model = faint_box_model();
   const size_t own = own_keypoints(model);
-  int strongest = 0;
-  for (size_t i = 0; i < own; ++i)
-    if (model.sift.keypoints[i].response >
-        model.sift.keypoints[static_cast<size_t>(strongest)].response)
-      strongest = static_cast<int>(i);
+  const int strongest =
+      strongest_own_keypoint(model, [](int, const cv::KeyPoint&) { return true; });
   const cv::Point2f anchor = model.sift.keypoints[static_cast<size_t>(strongest)].pt;
   std::vector<int> bunch(own);
   std::iota(bunch.begin(), bunch.end(), 0);

@@ -3,6 +3,7 @@
 // normal is placed by all of its evidence.
 #include "../../src/scene_explanation.hpp"
 #include "../support/box.hpp"
+#include "../support/model_keypoints.hpp"
 #include "../support/tilted_face.hpp"
 #include "common/scene.hpp"
 
@@ -27,6 +28,7 @@ using namespace pickdetect;
 using pickdetect::test_scene::box_detector;
 using pickdetect::test_scene::box_model;
 using pickdetect::test_scene::Pose;
+using pickdetect::test_scene::strongest_own_keypoint;
 
 namespace {
 
@@ -130,9 +132,6 @@ TEST(SceneExplanation, AFewMatchesOfAFaceFarOffThePicturePlaneMakeItsInstance) {
   // so no similarity gathers four of them, while one affine map carries them all. As a small
   // or partly seen face far off the picture plane gives: found, where it is.
   const Model& model = box_model();
-  const size_t own =
-      extract_features(model.image, model.mask, FeatureKind::Sift, model.contrast_threshold)
-          .keypoints.size(); // the picture's own come first, then its tilted views'
   const cv::Point2f centre = model.principal_points[0];
   const double scale = 0.8, squeeze = 0.5, turn = 20.0;
   const double rad = turn * CV_PI / 180.0;
@@ -146,13 +145,9 @@ TEST(SceneExplanation, AFewMatchesOfAFaceFarOffThePicturePlaneMakeItsInstance) {
     const float x0 = static_cast<float>(model.image.cols * column) / columns;
     const float x1 = static_cast<float>(model.image.cols * (column + 1)) / columns;
     const float side = column % 2 == 0 ? -1.f : 1.f;
-    int best = -1;
-    for (size_t i = 0; i < own; ++i) {
-      const cv::KeyPoint& k = model.sift.keypoints[i];
-      if (k.pt.x >= x0 && k.pt.x < x1 && side * (k.pt.y - centre.y) >= 0.25f * model.image.rows &&
-          (best < 0 || k.response > model.sift.keypoints[static_cast<size_t>(best)].response))
-        best = static_cast<int>(i);
-    }
+    const int best = strongest_own_keypoint(model, [&](int, const cv::KeyPoint& k) {
+      return k.pt.x >= x0 && k.pt.x < x1 && side * (k.pt.y - centre.y) >= 0.25f * model.image.rows;
+    });
     ASSERT_GE(best, 0) << "column " << column;
     cv::KeyPoint k = model.sift.keypoints[static_cast<size_t>(best)];
     const cv::Vec2d p = map * cv::Vec2d(k.pt.x - centre.x, k.pt.y - centre.y);
@@ -228,9 +223,6 @@ TEST(SceneExplanation, AnAffineMapLargerThanItsKeypointsSizesDoesNotPlaceAFace) 
   // larger than its keypoints' sizes say (foreshortening shrinks one axis): the similarity of
   // the six places it.
   const Model& model = box_model();
-  const size_t own =
-      extract_features(model.image, model.mask, FeatureKind::Sift, model.contrast_threshold)
-          .keypoints.size(); // the picture's own come first, then its tilted views'
   const cv::Point2f centre = model.principal_points[0];
   const cv::Point2f at(320.f, 240.f);
   const float scale = 0.6f, larger = 1.0f;
@@ -243,14 +235,10 @@ TEST(SceneExplanation, AnAffineMapLargerThanItsKeypointsSizesDoesNotPlaceAFace) 
     for (int r = 0; r < rows; ++r)
       for (int c = 0; c < columns; ++c) {
         const float x0 = centre.x - w / 2 + w * c / columns, y0 = centre.y - h / 2 + h * r / rows;
-        int best = -1;
-        for (size_t i = 0; i < own; ++i) {
-          const cv::KeyPoint& k = model.sift.keypoints[i];
-          if (k.pt.x >= x0 && k.pt.x < x0 + w / columns && k.pt.y >= y0 && k.pt.y < y0 + h / rows &&
-              std::find(taken.begin(), taken.end(), static_cast<int>(i)) == taken.end() &&
-              (best < 0 || k.response > model.sift.keypoints[static_cast<size_t>(best)].response))
-            best = static_cast<int>(i);
-        }
+        const int best = strongest_own_keypoint(model, [&](int i, const cv::KeyPoint& k) {
+          return k.pt.x >= x0 && k.pt.x < x0 + w / columns && k.pt.y >= y0 &&
+                 k.pt.y < y0 + h / rows && std::find(taken.begin(), taken.end(), i) == taken.end();
+        });
         if (best >= 0) {
           out.push_back(best);
           taken.push_back(best);
