@@ -279,7 +279,8 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
                                   std::max(fewest, kMinForeshortenedFewest))) {
           // Too few of its votes agree on one pose: for a model of faint print, a hypothesis of
           // two or three votes that one stray vote made look like more (below).
-          weak.push_back(&members);
+          if (members.size() >= kMinGuidedVotes)
+            weak.push_back(&members);
           continue;
         }
         place(inst, ms.model, h);
