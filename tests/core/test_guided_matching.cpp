@@ -43,12 +43,13 @@ cv::Point2f on_face(const Model& model, cv::Point2f p, cv::Point2f at = kAt) {
 
 /// The strongest of the picture's own keypoints in each cell of a 4 x 3 grid.
 std::vector<int> grid_keypoints(const Model& model) {
+  const size_t own = own_keypoints(model);
   std::vector<int> chosen;
   for (int row = 0; row < 3; ++row)
     for (int column = 0; column < 4; ++column) {
       const float x0 = model.image.cols * column / 4.f, x1 = model.image.cols * (column + 1) / 4.f;
       const float y0 = model.image.rows * row / 3.f, y1 = model.image.rows * (row + 1) / 3.f;
-      const int best = strongest_own_keypoint(model, [&](int, const cv::KeyPoint& k) {
+      const int best = strongest_own_keypoint(model, own, [&](int, const cv::KeyPoint& k) {
         return k.pt.x >= x0 && k.pt.x < x1 && k.pt.y >= y0 && k.pt.y < y1;
       });
       if (best >= 0)
@@ -93,20 +94,25 @@ Features placed_keypoints(const Model& model, const std::vector<int>& chosen,
   return scene;
 }
 
-/// The frame's keypoints of the grid (grid_keypoints) on the face centred at `at`: the
-/// `exact_count` nearest the middle row keep their own descriptors (the two nearest: their
-/// votes for the centre agree within 3 px). With `only_exact` the others are left out.
-Features face_keypoints(const Model& model, bool only_exact, cv::Point2f at = kAt,
-                        size_t exact_count = 2) {
+/// The `count` keypoints of `chosen` nearest the picture's middle row (the two nearest: their
+/// votes for the centre agree within 3 px).
+std::vector<int> nearest_middle_row(const Model& model, std::vector<int> chosen, size_t count) {
   const cv::Point2f c = model.principal_points[0];
-  std::vector<int> chosen = grid_keypoints(model);
-  std::vector<int> by_row = chosen;
-  std::sort(by_row.begin(), by_row.end(), [&](int a, int b) {
+  std::sort(chosen.begin(), chosen.end(), [&](int a, int b) {
     return std::abs(model.sift.keypoints[a].pt.y - c.y) <
            std::abs(model.sift.keypoints[b].pt.y - c.y);
   });
-  const std::vector<int> exact(
-      by_row.begin(), by_row.begin() + static_cast<long>(std::min(exact_count, by_row.size())));
+  chosen.resize(std::min(count, chosen.size()));
+  return chosen;
+}
+
+/// The frame's keypoints of the grid (grid_keypoints) on the face centred at `at`: the
+/// `exact_count` nearest the middle row (nearest_middle_row) keep their own descriptors. With
+/// `only_exact` the others are left out.
+Features face_keypoints(const Model& model, bool only_exact, cv::Point2f at = kAt,
+                        size_t exact_count = 2) {
+  std::vector<int> chosen = grid_keypoints(model);
+  const std::vector<int> exact = nearest_middle_row(model, chosen, exact_count);
   if (only_exact)
     chosen = exact;
   return placed_keypoints(model, chosen, exact, at);
@@ -120,6 +126,21 @@ void expect_on_face(const Model& model, const Instance& inst) {
         << "principal point " << k << ": expected (" << truth.x << ", " << truth.y << "), got ("
         << inst.points[k].x << ", " << inst.points[k].y << ")";
   }
+}
+
+/// Detects `scene` with `model` alone: `ratio_matches` matches pass the ratio test (the
+/// premise), and the one instance found is the face, completed by guided matching from at least
+/// `least_pairs` pairs, and not pickable.
+void expect_one_guided_face(const Model& model, const Features& scene, int ratio_matches,
+                            int least_pairs) {
+  const Detection d = Detector({model}).detect(scene, cv::Size(640, 480), Settings());
+  EXPECT_EQ(d.matches, ratio_matches) << "the premise: so many matches pass the ratio test";
+  ASSERT_EQ(d.instances.size(), 1u) << "the face is completed from its keypoints' descriptors";
+  const Instance& inst = d.instances[0];
+  EXPECT_GE(inst.matches, least_pairs) << "the rest of the face supports it";
+  EXPECT_TRUE(inst.guided);
+  EXPECT_FALSE(inst.pickable);
+  expect_on_face(model, inst);
 }
 
 } // namespace
@@ -192,7 +213,7 @@ TEST(GuidedMatching, AFaintFaceFoundOnABunchOfMatchesIsCompleted) {
   const Model model = faint_box_model();
   const size_t own = own_keypoints(model);
   const int strongest =
-      strongest_own_keypoint(model, [](int, const cv::KeyPoint&) { return true; });
+      strongest_own_keypoint(model, own, [](int, const cv::KeyPoint&) { return true; });
   const cv::Point2f anchor = model.sift.keypoints[static_cast<size_t>(strongest)].pt;
   std::vector<int> bunch(own);
   std::iota(bunch.begin(), bunch.end(), 0);
@@ -213,15 +234,7 @@ TEST(GuidedMatching, AFaintFaceFoundOnABunchOfMatchesIsCompleted) {
   cv::convexHull(bunched, hull);
   ASSERT_LT(cv::contourArea(hull), 0.03 * cv::contourArea(model.outline))
       << "the premise: the four are bunched on a small part of the face";
-
-  const Detection d = Detector({model}).detect(scene, cv::Size(640, 480), Settings());
-  EXPECT_EQ(d.matches, 4) << "the premise: four matches pass the ratio test";
-  ASSERT_EQ(d.instances.size(), 1u) << "the face is completed from its keypoints' descriptors";
-  const Instance& inst = d.instances[0];
-  EXPECT_GE(inst.matches, 8) << "the rest of the face supports it";
-  EXPECT_TRUE(inst.guided);
-  EXPECT_FALSE(inst.pickable);
-  expect_on_face(model, inst);
+  expect_one_guided_face(model, scene, 4, 8);
 }
 
 TEST(GuidedMatching, AFaintFaceOfThreeMatchesAndAStrayVoteIsCompleted) {
@@ -231,25 +244,12 @@ TEST(GuidedMatching, AFaintFaceOfThreeMatchesAndAStrayVoteIsCompleted) {
   // pose fits. Without the stray vote the three are completed by guided matching; with it, so
   // they are still.
   const Model model = faint_box_model();
-  const cv::Point2f c = model.principal_points[0];
   const std::vector<int> chosen = grid_keypoints(model);
-  std::vector<int> by_row = chosen;
-  std::sort(by_row.begin(), by_row.end(), [&](int a, int b) {
-    return std::abs(model.sift.keypoints[a].pt.y - c.y) <
-           std::abs(model.sift.keypoints[b].pt.y - c.y);
-  });
-  const std::vector<int> exact(by_row.begin(), by_row.begin() + 4);
+  const std::vector<int> exact = nearest_middle_row(model, chosen, 4);
+  ASSERT_EQ(exact.size(), 4u);
   Features scene = placed_keypoints(model, chosen, exact, kAt);
   const size_t stray =
       static_cast<size_t>(std::find(chosen.begin(), chosen.end(), exact[3]) - chosen.begin());
   scene.keypoints[stray].pt += cv::Point2f(0.f, 12.f);
-
-  const Detection d = Detector({model}).detect(scene, cv::Size(640, 480), Settings());
-  EXPECT_EQ(d.matches, 4) << "the premise: four matches pass the ratio test";
-  ASSERT_EQ(d.instances.size(), 1u) << "the face is completed from its keypoints' descriptors";
-  const Instance& inst = d.instances[0];
-  EXPECT_GE(inst.matches, 10) << "the face's keypoints, the stray one aside, support it";
-  EXPECT_TRUE(inst.guided);
-  EXPECT_FALSE(inst.pickable);
-  expect_on_face(model, inst);
+  expect_one_guided_face(model, scene, 4, 10); // the face's keypoints, the stray one aside
 }

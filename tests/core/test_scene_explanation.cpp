@@ -27,6 +27,7 @@
 using namespace pickdetect;
 using pickdetect::test_scene::box_detector;
 using pickdetect::test_scene::box_model;
+using pickdetect::test_scene::own_keypoints;
 using pickdetect::test_scene::Pose;
 using pickdetect::test_scene::strongest_own_keypoint;
 
@@ -132,6 +133,7 @@ TEST(SceneExplanation, AFewMatchesOfAFaceFarOffThePicturePlaneMakeItsInstance) {
   // so no similarity gathers four of them, while one affine map carries them all. As a small
   // or partly seen face far off the picture plane gives: found, where it is.
   const Model& model = box_model();
+  const size_t own = own_keypoints(model);
   const cv::Point2f centre = model.principal_points[0];
   const double scale = 0.8, squeeze = 0.5, turn = 20.0;
   const double rad = turn * CV_PI / 180.0;
@@ -145,7 +147,7 @@ TEST(SceneExplanation, AFewMatchesOfAFaceFarOffThePicturePlaneMakeItsInstance) {
     const float x0 = static_cast<float>(model.image.cols * column) / columns;
     const float x1 = static_cast<float>(model.image.cols * (column + 1)) / columns;
     const float side = column % 2 == 0 ? -1.f : 1.f;
-    const int best = strongest_own_keypoint(model, [&](int, const cv::KeyPoint& k) {
+    const int best = strongest_own_keypoint(model, own, [&](int, const cv::KeyPoint& k) {
       return k.pt.x >= x0 && k.pt.x < x1 && side * (k.pt.y - centre.y) >= 0.25f * model.image.rows;
     });
     ASSERT_GE(best, 0) << "column " << column;
@@ -223,6 +225,7 @@ TEST(SceneExplanation, AnAffineMapLargerThanItsKeypointsSizesDoesNotPlaceAFace) 
   // larger than its keypoints' sizes say (foreshortening shrinks one axis): the similarity of
   // the six places it.
   const Model& model = box_model();
+  const size_t own = own_keypoints(model);
   const cv::Point2f centre = model.principal_points[0];
   const cv::Point2f at(320.f, 240.f);
   const float scale = 0.6f, larger = 1.0f;
@@ -235,7 +238,7 @@ TEST(SceneExplanation, AnAffineMapLargerThanItsKeypointsSizesDoesNotPlaceAFace) 
     for (int r = 0; r < rows; ++r)
       for (int c = 0; c < columns; ++c) {
         const float x0 = centre.x - w / 2 + w * c / columns, y0 = centre.y - h / 2 + h * r / rows;
-        const int best = strongest_own_keypoint(model, [&](int i, const cv::KeyPoint& k) {
+        const int best = strongest_own_keypoint(model, own, [&](int i, const cv::KeyPoint& k) {
           return k.pt.x >= x0 && k.pt.x < x0 + w / columns && k.pt.y >= y0 &&
                  k.pt.y < y0 + h / rows && std::find(taken.begin(), taken.end(), i) == taken.end();
         });

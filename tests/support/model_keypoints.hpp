@@ -18,10 +18,11 @@ inline size_t own_keypoints(const Model& model) {
       .keypoints.size();
 }
 
-/// The strongest (by response) of the model's own keypoints for which `wanted(index, keypoint)`
-/// holds, or -1 when none does.
-template <typename Wanted> int strongest_own_keypoint(const Model& model, Wanted&& wanted) {
-  const size_t own = own_keypoints(model);
+/// The strongest (by response) of the model's first `own` keypoints (own_keypoints: counted
+/// once by the caller, a SIFT run on the picture) for which `wanted(index, keypoint)` holds, or
+/// -1 when none does.
+template <typename Wanted>
+int strongest_own_keypoint(const Model& model, size_t own, Wanted&& wanted) {
   int best = -1;
   for (size_t i = 0; i < own; ++i) {
     const cv::KeyPoint& k = model.sift.keypoints[i];
