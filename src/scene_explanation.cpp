@@ -13,11 +13,13 @@
 #include <pickdetect/pose.hpp>
 
 #include <opencv2/core.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 namespace pickdetect::detail {
 namespace {
@@ -183,14 +185,14 @@ private:
   cv::Mat shown_;
 };
 
-/// Whether instance `i` shows its print in the frame where it is seen (kMinPrintShare); cells
-/// where a kept instance's print shows tell nothing about it (it may lie under that instance);
-/// true when too little of it tells.
+/// Whether instance `i` shows its print in the frame where it is seen (kMinPrintShare), from
+/// `cells`, its comparison with the frame; cells where a kept instance's print shows tell nothing
+/// about it (it may lie under that instance); true when too little of it tells.
 bool instance_shows_print(const std::vector<Instance>& instances, size_t i,
-                          const std::vector<char>& keep, const std::vector<Model>& models,
-                          const cv::Mat& grey, ShownPrint& shown) {
+                          const CellComparison& cells, const std::vector<char>& keep,
+                          const std::vector<Model>& models, const cv::Mat& grey,
+                          ShownPrint& shown) {
   const cv::Mat& others = shown.around(instances, i, keep, models, grey);
-  const CellComparison cells = compare_cells(instances[i], models[instances[i].model], grey, {});
   int print = 0, denied = 0;
   for (int r = 0; r < cells.rows; ++r)
     for (int c = 0; c < cells.columns; ++c) {
@@ -236,18 +238,27 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
                          kPlaceShare * model_side(models[inst.model]));
     cell[inst.model] = std::max(cell[inst.model], radius[i]);
   }
+  // The grids, then what each instance explains: each on its own, in parallel, into its own slot
+  // (the same result whatever the threads).
   std::vector<KeypointGrid> model_grid(models.size());
-  for (size_t m = 0; m < models.size(); ++m)
-    if (cell[m] > 0.0)
-      model_grid[m] = KeypointGrid(models[m].features(kind).keypoints, cell[m]);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(models.size())), [&](const cv::Range& r) {
+    for (int m = r.start; m < r.end; ++m)
+      if (cell[static_cast<size_t>(m)] > 0.0)
+        model_grid[static_cast<size_t>(m)] = KeypointGrid(
+            models[static_cast<size_t>(m)].features(kind).keypoints, cell[static_cast<size_t>(m)]);
+  });
   std::vector<std::vector<int>> explains(n);
   std::vector<int> on_outline(n, 0);
-  for (size_t i = 0; i < n; ++i) {
-    const Instance& inst = instances[i];
-    const Model& model = models[inst.model];
-    explains[i] = explained(inst, bounds(model.outline), model_grid[inst.model], radius[i],
-                            model.features(kind), scene, scene_grid, kind, on_outline[i]);
-  }
+  cv::parallel_for_(cv::Range(0, static_cast<int>(n)), [&](const cv::Range& r) {
+    for (int k = r.start; k < r.end; ++k) {
+      const size_t i = static_cast<size_t>(k);
+      const Instance& inst = instances[i];
+      const Model& model = models[static_cast<size_t>(inst.model)];
+      explains[i] =
+          explained(inst, bounds(model.outline), model_grid[static_cast<size_t>(inst.model)],
+                    radius[i], model.features(kind), scene, scene_grid, kind, on_outline[i]);
+    }
+  });
 
   std::vector<size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
@@ -257,6 +268,24 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
     if (instances[a].guided != instances[b].guided)
       return !instances[a].guided;
     return explains[a].size() > explains[b].size();
+  });
+  // The tests that do not depend on which instances are kept, and the comparison of the frame's
+  // pixels with the print of each instance that passes them and explains few keypoints (the
+  // pixel test below), in parallel: nearly all of those reach that test.
+  std::vector<char> placed(n, 0);
+  std::vector<std::optional<CellComparison>> cells(n);
+  cv::parallel_for_(cv::Range(0, static_cast<int>(n)), [&](const cv::Range& r) {
+    for (int k = r.start; k < r.end; ++k) {
+      const size_t i = static_cast<size_t>(k);
+      const Instance& inst = instances[i];
+      const Model& model = models[static_cast<size_t>(inst.model)];
+      placed[i] = spread_of(inst, model, explains[i], scene) >= kMinSpread &&
+                  !(inst.matches < kFewMatchesTimes * min_matches &&
+                    static_cast<double>(explains[i].size()) < kMinExplainedShare * on_outline[i]);
+      if (placed[i] && !grey.empty() && explains[i].size() < kPixelCheckBelow &&
+          explains[i].size() >= static_cast<size_t>(std::max(min_matches, 0)))
+        cells[i] = compare_cells(inst, model, grey, {});
+    }
   });
   std::vector<int> taken(scene.keypoints.size(), 0);
   std::vector<char> keep(n, 0);
@@ -268,13 +297,9 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
     if (static_cast<int>(own) < min_matches ||
         static_cast<double>(own) < kOwnShare * static_cast<double>(explains[i].size()))
       continue;
-    if (spread_of(instances[i], models[instances[i].model], explains[i], scene) < kMinSpread)
+    if (!placed[i])
       continue;
-    if (instances[i].matches < kFewMatchesTimes * min_matches &&
-        static_cast<double>(explains[i].size()) < kMinExplainedShare * on_outline[i])
-      continue;
-    if (!grey.empty() && explains[i].size() < kPixelCheckBelow &&
-        !instance_shows_print(instances, i, keep, models, grey, shown))
+    if (cells[i] && !instance_shows_print(instances, i, *cells[i], keep, models, grey, shown))
       continue;
     if (instances[i].guided && lies_on_kept(instances, keep, i))
       continue;

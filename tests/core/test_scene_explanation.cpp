@@ -17,6 +17,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -81,22 +82,31 @@ TEST(SceneExplanation, TouchingIdenticalBoxesAreEachFoundOnce) {
   }
 }
 
-TEST(SceneExplanation, ShiftedAndTurnedCopiesLoseToTheTrueInstances) {
-  std::vector<Pose> poses;
+/// A packed row of three boxes (`poses`), its features, and the three instances found there with
+/// two false copies of the first: shifted half a box along the row (spanning two neighbours) and
+/// turned half a turn, each claiming as much evidence as any true instance.
+std::vector<Instance> row_and_copies(std::vector<Pose>& poses, Features& features) {
   const cv::Mat scene = packed_row(3, 0.5, poses);
-  const Features features = extract_features(scene);
+  features = extract_features(scene);
   std::vector<Instance> instances = box_detector().detect(features, scene.size()).instances;
-  ASSERT_EQ(instances.size(), poses.size());
+  if (instances.size() != poses.size())
+    return instances;
   const Instance first = instances[0];
   const double half = 0.5 * box_model().image.cols * 0.5;
   const cv::Point2f c = first.center;
-  // Half a box along the row (spanning two neighbours), and the box turned half a turn.
-  const cv::Matx33d shift(1, 0, half, 0, 1, 0, 0, 0, 1);
-  const cv::Matx33d turn(-1, 0, 2 * c.x, 0, -1, 2 * c.y, 0, 0, 1);
-  instances.push_back(moved(first, shift));
-  instances.push_back(moved(first, turn));
+  instances.push_back(moved(first, cv::Matx33d(1, 0, half, 0, 1, 0, 0, 0, 1)));
+  instances.push_back(moved(first, cv::Matx33d(-1, 0, 2 * c.x, 0, -1, 2 * c.y, 0, 0, 1)));
   for (Instance& inst : instances)
-    inst.matches = 40; // the copies claim as much evidence as any true instance
+    inst.matches = 40;
+  return instances;
+}
+
+TEST(SceneExplanation, ShiftedAndTurnedCopiesLoseToTheTrueInstances) {
+  std::vector<Pose> poses;
+  Features features;
+  std::vector<Instance> instances = row_and_copies(poses, features);
+  ASSERT_EQ(instances.size(), poses.size() + 2) << "three boxes found, two copies added";
+  const Instance first = instances[0];
   detail::explain_scene(instances, box_detector().models(), features, FeatureKind::Sift, 4);
   ASSERT_EQ(instances.size(), poses.size()) << "the shifted and the turned copy must be dropped";
   for (const Pose& p : poses) {
@@ -107,6 +117,29 @@ TEST(SceneExplanation, ShiftedAndTurnedCopiesLoseToTheTrueInstances) {
     EXPECT_LT(std::abs(inst->homography(0, 0) - first.homography(0, 0)), 0.05)
         << "a kept instance is turned: the turned copy survived";
   }
+}
+
+TEST(SceneExplanation, KeepsTheSameInstancesOnOneThreadAsOnSeveral) {
+  // What each instance explains is found in parallel: the instances kept, and their order, must
+  // not depend on the threads.
+  std::vector<Pose> poses;
+  Features features;
+  const std::vector<Instance> found = row_and_copies(poses, features);
+  ASSERT_EQ(found.size(), poses.size() + 2);
+  const int threads = cv::getNumThreads();
+  std::vector<std::vector<Instance>> kept;
+  for (int n : {1, 4}) {
+    cv::setNumThreads(n);
+    std::vector<Instance> instances = found;
+    detail::explain_scene(instances, box_detector().models(), features, FeatureKind::Sift, 4);
+    kept.push_back(std::move(instances));
+  }
+  cv::setNumThreads(threads);
+  ASSERT_EQ(kept[0].size(), poses.size());
+  ASSERT_EQ(kept[1].size(), kept[0].size()) << "one thread and four keep different instances";
+  for (size_t i = 0; i < kept[0].size(); ++i)
+    EXPECT_EQ(kept[1][i].center, kept[0][i].center)
+        << "instance " << i << " differs between one thread and four";
 }
 
 TEST(SceneExplanation, AFaceTiltedFarFromTheCameraIsPlacedByAllItsEvidence) {
