@@ -29,8 +29,12 @@ constexpr unsigned kKdSeed = 20240101u;
 constexpr float kShiftBinPx = 6.f;
 constexpr double kMinShiftShare = 0.05;
 constexpr int kMinShiftPairs = 20;
-/// Scene descriptors are searched in blocks of this many rows, in parallel.
-constexpr int kSearchBlock = 256;
+/// Scene descriptors are searched in blocks of this many rows, in parallel: small enough that
+/// the few hundred keypoints extracted around a change in a reused frame (feature_reuse.cpp)
+/// take both cores. A search costs about a tenth of a millisecond (four models and their tilted
+/// views), so a block is some milliseconds of work and a whole frame's hundred-odd blocks cost
+/// nothing to share out.
+constexpr int kSearchBlock = 32;
 /// Ambiguity::Share: neighbours searched per scene descriptor (two per model, at most this).
 constexpr int kMaxNeighbours = 16;
 /// Ambiguity::Share: a model's nearest descriptor within 1 / kNearlyAsGood of the nearest of
