@@ -273,14 +273,15 @@ void FeatureReuse::set_whole_interval(int frames) {
 }
 
 bool FeatureReuse::same_run(const Detector& detector, const cv::Mat& grey, const Settings& s,
-                            double contrast) const {
-  return detector_ == &detector && since_whole_ + 1 < whole_interval_ && grey.size() == size_ &&
-         s.features == FeatureKind::Sift && !(s.detection_scale < 1.0) && s == settings_ &&
-         std::abs(contrast - contrast_) <= kContrastDrift * contrast_;
+                            double contrast, bool any_interval) const {
+  return detector_ == &detector && (any_interval || since_whole_ + 1 < whole_interval_) &&
+         grey.size() == size_ && s.features == FeatureKind::Sift && !(s.detection_scale < 1.0) &&
+         s == settings_ && std::abs(contrast - contrast_) <= kContrastDrift * contrast_;
 }
 
 Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& grey,
-                                     const cv::Mat& colour, const Settings& s, double contrast) {
+                                     const cv::Mat& colour, const Settings& s, double contrast,
+                                     bool refresh) {
   auto t = Clock::now();
   // SIFT on the frame with the belt's motion blur undone (when known: the run goes on).
   const bool sharpen = s.features == FeatureKind::Sift && !(s.detection_scale < 1.0) &&
@@ -304,8 +305,23 @@ Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& gr
   grey.copyTo(last_grey_);
   grey.copyTo(whole_grey_);
   motions_.assign(detection_.instances.size(), Motion{std::nullopt, cv::Point2f(), cv::Point2f()});
-  leaving_.clear();
-  leaving_motions_.clear();
+  // What is left in view of the objects leaving the frame: too little to find, it rides on out
+  // by its last step through a whole frame of the run, so that its blocks are not extracted
+  // again in each frame after it.
+  std::vector<Instance> leaving;
+  std::vector<Motion> leaving_motions;
+  for (size_t i = 0; refresh && i < leaving_.size(); ++i) {
+    const std::optional<cv::Point2f>& step = leaving_motions_[i].step;
+    if (!step || !leaves(leaving_[i].outline, *step, grey.size()))
+      continue;
+    Instance left = leaving_[i];
+    for (cv::Point2f& p : left.outline)
+      p += *step;
+    leaving.push_back(std::move(left));
+    leaving_motions.push_back(Motion{step, std::nullopt, cv::Point2f()});
+  }
+  leaving_ = std::move(leaving);
+  leaving_motions_ = std::move(leaving_motions);
   since_whole_ = 0;
   last_ = ReuseStats{static_cast<int>(features_.keypoints.size()), 0, 1.0, true, false};
   return detection_;
@@ -318,7 +334,8 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   const auto t0 = Clock::now();
   const double contrast = detector.frame_contrast_threshold(grey, s);
   if (whole_interval_ <= 1 || !same_run(detector, grey, s, contrast))
-    return detect_whole(detector, grey, colour, s, contrast);
+    return detect_whole(detector, grey, colour, s, contrast,
+                        whole_interval_ > 1 && same_run(detector, grey, s, contrast, true));
   ++since_whole_;
 
   const cv::Mat means = block_means(grey);
@@ -398,14 +415,22 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
       const Motion& motion = motion_at(n);
       cv::Point2f shift;
       std::optional<cv::Point2f> since_whole;
-      if (!in_view(instance, grey.size(), motion.step)) {
-        // The last sliver in view of one leaving the frame, too narrow to measure (and to
-        // find anything on): moved by its last step.
-        if (n < found || !motion.step || !moves_out(box, *motion.step, grey.size()))
+      // Its last step; found in a whole frame (its step not known yet), the belt's, if known.
+      const std::optional<cv::Point2f> step = motion.step ? motion.step : belt_step_;
+      // What is left in view of one leaving the frame (no longer found, or less than
+      // kLeastInFrame of it in view), too narrow to measure or that ECC no longer follows (the
+      // middle of its box, where ECC looks, is out of view; too little is left to find anything
+      // on): moved by its last step.
+      const bool left_over = step && moves_out(box, *step, grey.size()) &&
+                             (n >= found || before.area() < kLeastInFrame * box.area());
+      if (!in_view(instance, grey.size(), step)) {
+        if (!left_over)
           continue; // Its blocks are extracted again.
-        shift = *motion.step;
+        shift = *step;
       } else if (!measure_shift(instance, motion, shift, since_whole)) {
-        continue; // Its blocks are extracted again.
+        if (!left_over)
+          continue; // Its blocks are extracted again.
+        shift = *step;
       }
       // What was in view moved to `after`; what comes into view beside it is extracted.
       const cv::Rect after = (before + cv::Point(cvRound(shift.x), cvRound(shift.y))) & frame;

@@ -41,8 +41,9 @@ struct ReuseStats {
 /// each time 0.4 more of its box is in view than when they were extracted, what came into view
 /// since, and its keypoints whose windows the edge cut, are extracted again.
 /// An instance riding out across the frame's edge is followed out, also once it is no longer
-/// found: what is left of it in view moves by its motion instead of being extracted again each
-/// frame (unless ECC no longer follows it).
+/// found and through a whole frame: what is left of it in view moves by its motion (by its last
+/// step once ECC no longer follows it, by the belt's after a whole frame) instead of being
+/// extracted again each frame.
 /// The matching runs on the new keypoints only; voting, poses, look-alikes and occlusion run on all
 /// of them, on the frame's pixels. A frame in which nothing changed gets the last detection.
 /// Every `whole_interval`-th frame, a frame of another size, contrast threshold, detector or
@@ -65,16 +66,20 @@ public:
   const ReuseStats& last() const { return last_; }
 
 private:
+  /// `refresh`: the whole frame every whole_interval frames of a run (what is left in view of
+  /// objects leaving the frame rides on out), not a new start.
   Detection detect_whole(const Detector& detector, const cv::Mat& grey, const cv::Mat& colour,
-                         const Settings& settings, double contrast);
+                         const Settings& settings, double contrast, bool refresh = false);
   /// The motion blur a frame carries along the belt (frame pixels), when both are known.
   cv::Point2f belt_blur() const;
   /// The belt's step and the exposure, from the instances that moved by `shifts` (each with
   /// its pose in this frame) on `grey`.
   void measure_belt(const Detector& detector, const cv::Mat& grey,
                     const std::vector<std::pair<const Instance*, cv::Point2f>>& shifts);
+  /// Whether `grey` goes on the run of the last frame (same detector, size, settings, about the
+  /// same contrast threshold) and, unless `any_interval`, the whole frame is not due.
   bool same_run(const Detector& detector, const cv::Mat& grey, const Settings& settings,
-                double contrast) const;
+                double contrast, bool any_interval = false) const;
 
   int whole_interval_;
   int since_whole_ = 0;
