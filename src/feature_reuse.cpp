@@ -184,6 +184,18 @@ bool ecc_shift(const cv::Mat& from, const cv::Mat& to, const std::vector<cv::Poi
   }
 }
 
+/// What following what is left in view of a leaving instance needs (its model, outline and
+/// centre), moved by `shift`.
+Instance remnant_moved(const Instance& instance, cv::Point2f shift) {
+  Instance left;
+  left.model = instance.model;
+  left.outline = instance.outline;
+  for (cv::Point2f& p : left.outline)
+    p += shift;
+  left.center = instance.center + shift;
+  return left;
+}
+
 /// Whether `step` carries an object whose box is `box` out of the frame: less of it in view.
 bool moves_out(const cv::Rect& box, const cv::Point2f& step, const cv::Size& size) {
   const cv::Rect frame(cv::Point(0, 0), size);
@@ -273,10 +285,10 @@ void FeatureReuse::set_whole_interval(int frames) {
 }
 
 bool FeatureReuse::same_run(const Detector& detector, const cv::Mat& grey, const Settings& s,
-                            double contrast, bool any_interval) const {
-  return detector_ == &detector && (any_interval || since_whole_ + 1 < whole_interval_) &&
-         grey.size() == size_ && s.features == FeatureKind::Sift && !(s.detection_scale < 1.0) &&
-         s == settings_ && std::abs(contrast - contrast_) <= kContrastDrift * contrast_;
+                            double contrast) const {
+  return detector_ == &detector && grey.size() == size_ && s.features == FeatureKind::Sift &&
+         !(s.detection_scale < 1.0) && s == settings_ &&
+         std::abs(contrast - contrast_) <= kContrastDrift * contrast_;
 }
 
 Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& grey,
@@ -310,16 +322,14 @@ Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& gr
   // again in each frame after it.
   std::vector<Instance> leaving;
   std::vector<Motion> leaving_motions;
-  for (size_t i = 0; refresh && i < leaving_.size(); ++i) {
-    const std::optional<cv::Point2f>& step = leaving_motions_[i].step;
-    if (!step || !leaves(leaving_[i].outline, *step, grey.size()))
-      continue;
-    Instance left = leaving_[i];
-    for (cv::Point2f& p : left.outline)
-      p += *step;
-    leaving.push_back(std::move(left));
-    leaving_motions.push_back(Motion{step, std::nullopt, cv::Point2f()});
-  }
+  if (refresh)
+    for (size_t i = 0; i < leaving_.size(); ++i) {
+      const std::optional<cv::Point2f>& step = leaving_motions_[i].step;
+      if (!step || !leaves(leaving_[i].outline, *step, grey.size()))
+        continue;
+      leaving.push_back(remnant_moved(leaving_[i], *step));
+      leaving_motions.push_back(Motion{step, std::nullopt, cv::Point2f()});
+    }
   leaving_ = std::move(leaving);
   leaving_motions_ = std::move(leaving_motions);
   since_whole_ = 0;
@@ -333,9 +343,9 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
     return detector.detect(grey, colour, s); // Its checks and its answer for tiny frames.
   const auto t0 = Clock::now();
   const double contrast = detector.frame_contrast_threshold(grey, s);
-  if (whole_interval_ <= 1 || !same_run(detector, grey, s, contrast))
-    return detect_whole(detector, grey, colour, s, contrast,
-                        whole_interval_ > 1 && same_run(detector, grey, s, contrast, true));
+  const bool run = whole_interval_ > 1 && same_run(detector, grey, s, contrast);
+  if (!run || since_whole_ + 1 >= whole_interval_)
+    return detect_whole(detector, grey, colour, s, contrast, run);
   ++since_whole_;
 
   const cv::Mat means = block_means(grey);
@@ -620,13 +630,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
     const Moved& m = moved[i];
     if (found_again[i] || !leaves(m.instance->outline, m.shift, grey.size()))
       continue;
-    Instance left; // Where it is now: what following it needs.
-    left.model = m.instance->model;
-    left.outline = m.instance->outline;
-    for (cv::Point2f& p : left.outline)
-      p += m.shift;
-    left.center = m.instance->center + m.shift;
-    leaving.push_back(std::move(left));
+    leaving.push_back(remnant_moved(*m.instance, m.shift)); // Where it is now.
     leaving_motions.push_back(Motion{m.shift, m.since_whole, m.since_edge});
   }
   for (size_t n = found; n < still.size(); ++n)

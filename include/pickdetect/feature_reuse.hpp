@@ -76,10 +76,10 @@ private:
   /// its pose in this frame) on `grey`.
   void measure_belt(const Detector& detector, const cv::Mat& grey,
                     const std::vector<std::pair<const Instance*, cv::Point2f>>& shifts);
-  /// Whether `grey` goes on the run of the last frame (same detector, size, settings, about the
-  /// same contrast threshold) and, unless `any_interval`, the whole frame is not due.
+  /// Whether `grey` goes on the run of the last frame: same detector, size and settings, about
+  /// the same contrast threshold.
   bool same_run(const Detector& detector, const cv::Mat& grey, const Settings& settings,
-                double contrast, bool any_interval = false) const;
+                double contrast) const;
 
   int whole_interval_;
   int since_whole_ = 0;
