@@ -253,3 +253,59 @@ TEST(GuidedMatching, AFaintFaceOfThreeMatchesAndAStrayVoteIsCompleted) {
   scene.keypoints[stray].pt += cv::Point2f(0.f, 12.f);
   expect_one_guided_face(model, scene, 4, 10); // the face's keypoints, the stray one aside
 }
+
+namespace {
+
+/// A 640 x 480 frame of mid-grey with the model's picture on the face (where face_keypoints puts
+/// its keypoints), left of `seen_to` (frame x): right of it a plain grey card lies on it. A dark
+/// and a white object in two corners give the frame a well-lit frame's span of grey.
+cv::Mat frame_of(const Model& model, float seen_to) {
+  cv::Mat frame(480, 640, CV_8UC1, cv::Scalar(128));
+  const cv::Matx22d m = face_map();
+  const cv::Point2f c = model.principal_points[0];
+  const cv::Vec2d shift = cv::Vec2d(kAt.x, kAt.y) - m * cv::Vec2d(c.x, c.y);
+  const cv::Matx23d to_frame(m(0, 0), m(0, 1), shift[0], m(1, 0), m(1, 1), shift[1]);
+  cv::warpAffine(model.image, frame, to_frame, frame.size(), cv::INTER_LINEAR,
+                 cv::BORDER_TRANSPARENT);
+  const int from = std::clamp(static_cast<int>(seen_to), 0, frame.cols);
+  frame(cv::Rect(from, 0, frame.cols - from, frame.rows)).setTo(cv::Scalar(128));
+  frame(cv::Rect(0, 0, 60, 60)).setTo(cv::Scalar(10));
+  frame(cv::Rect(580, 420, 60, 60)).setTo(cv::Scalar(250));
+  return frame;
+}
+
+/// The faint face of AFaintFaceOfTwoRatioTestMatchesIsCompleted, its keypoints in the frame as
+/// they are there, detected with the frame's pixels.
+Detection detect_on(const Model& model, const cv::Mat& frame) {
+  const Features scene = face_keypoints(model, false);
+  const Detector detector({model});
+  return detector.detect(frame, scene, detector.match(scene), Settings());
+}
+
+} // namespace
+
+TEST(GuidedMatching, AFaceWhoseFrameShowsItsPrintStands) {
+  const Model model = faint_box_model();
+  const Detection d = detect_on(model, frame_of(model, 640.f));
+  ASSERT_EQ(d.instances.size(), 1u) << "the print in the frame bears the pairs out";
+  EXPECT_TRUE(d.instances[0].guided);
+  expect_on_face(model, d.instances[0]);
+}
+
+TEST(GuidedMatching, AFacePartlyUnderACardStands) {
+  // A plain card hides the face's right part (a third of it): what is seen of the print still
+  // bears it out.
+  const Model model = faint_box_model();
+  const Detection d = detect_on(model, frame_of(model, kAt.x + 40.f));
+  ASSERT_EQ(d.instances.size(), 1u) << "two thirds of the print are seen";
+  EXPECT_TRUE(d.instances[0].guided);
+  EXPECT_FALSE(d.instances[0].pickable);
+}
+
+TEST(GuidedMatching, PairsWhereTheFrameShowsNoneOfThePrintMakeNoInstance) {
+  // The same keypoints, but the frame shows none of the face's print where they lie: pairs on
+  // something else (a line drawing's strokes paired along a striped card or a tote's rim).
+  const Model model = faint_box_model();
+  const Detection d = detect_on(model, frame_of(model, 0.f));
+  EXPECT_TRUE(d.instances.empty()) << "the frame does not show the face the pairs stand for";
+}
