@@ -304,8 +304,20 @@ TEST(GuidedMatching, AFacePartlyUnderACardStands) {
 
 TEST(GuidedMatching, PairsWhereTheFrameShowsNoneOfThePrintMakeNoInstance) {
   // The same keypoints, but the frame shows none of the face's print where they lie: pairs on
-  // something else (a line drawing's strokes paired along a striped card or a tote's rim).
+  // something else (a line drawing's strokes paired along a striped card or a bin's rim).
   const Model model = faint_box_model();
   const Detection d = detect_on(model, frame_of(model, 0.f));
   EXPECT_TRUE(d.instances.empty()) << "the frame does not show the face the pairs stand for";
+}
+
+TEST(GuidedMatching, AFaceInADimFrameStands) {
+  // The frame of AFaceWhoseFrameShowsItsPrintStands at 30 % of its light: the faint print keeps
+  // too little detail to be told from flat ground, so flat cells do not count against it.
+  const Model model = faint_box_model();
+  cv::Mat dim;
+  frame_of(model, 640.f).convertTo(dim, CV_8U, 0.3);
+  ASSERT_LT(exposure_contrast_share(dim), 0.5) << "the premise: a dim frame";
+  const Detection d = detect_on(model, dim);
+  ASSERT_EQ(d.instances.size(), 1u) << "the face stands on its pairs";
+  EXPECT_TRUE(d.instances[0].guided);
 }
