@@ -208,7 +208,7 @@ bool instance_shows_print(const std::vector<Instance>& instances, size_t i,
                           const std::vector<Model>& models, const cv::Mat& grey, ShownPrint& shown,
                           bool lit) {
   const cv::Mat& others = shown.around(instances, i, keep, models, grey);
-  int print = 0, denied = 0, unshown = 0;
+  int compared = 0, print = 0, denied = 0;
   for (int r = 0; r < cells.rows; ++r)
     for (int c = 0; c < cells.columns; ++c) {
       const CellLook& look = cells.looks[static_cast<size_t>(r) * cells.columns + c];
@@ -217,17 +217,15 @@ bool instance_shows_print(const std::vector<Instance>& instances, size_t i,
       if (!look.compared ||
           (middle.inside(cv::Rect(0, 0, others.cols, others.rows)) && others.at<uchar>(middle)))
         continue;
-      if (shows_print(look)) {
+      ++compared;
+      if (shows_print(look))
         ++print;
-      } else {
+      else
         denied += denies_print(look, cells);
-        ++unshown;
-      }
     }
   const int told = print + denied;
   if (told >= kMinToldCells && print < kMinPrintShare * told)
     return false;
-  const int compared = print + unshown;
   return !instances[i].guided || !lit || compared < kMinForeignCells ||
          print >= kMinGuidedPrintShare * compared;
 }
@@ -311,7 +309,11 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
   std::vector<int> taken(scene.keypoints.size(), 0);
   std::vector<char> keep(n, 0);
   ShownPrint shown;
-  const bool lit = !grey.empty() && exposure_contrast_share(grey) >= kMinGuidedExposure;
+  // The frame's exposure matters only to faces of guided matching (kMinGuidedExposure).
+  const bool lit = !grey.empty() &&
+                   std::any_of(instances.begin(), instances.end(),
+                               [](const Instance& inst) { return inst.guided; }) &&
+                   exposure_contrast_share(grey) >= kMinGuidedExposure;
   for (size_t i : order) {
     size_t own = 0;
     for (int s : explains[i])

@@ -261,12 +261,13 @@ namespace {
 /// and a white object in two corners give the frame a well-lit frame's span of grey.
 cv::Mat frame_of(const Model& model, float seen_to) {
   cv::Mat frame(480, 640, CV_8UC1, cv::Scalar(128));
-  const cv::Matx22d m = face_map();
-  const cv::Point2f c = model.principal_points[0];
-  const cv::Vec2d shift = cv::Vec2d(kAt.x, kAt.y) - m * cv::Vec2d(c.x, c.y);
-  const cv::Matx23d to_frame(m(0, 0), m(0, 1), shift[0], m(1, 0), m(1, 1), shift[1]);
-  cv::warpAffine(model.image, frame, to_frame, frame.size(), cv::INTER_LINEAR,
-                 cv::BORDER_TRANSPARENT);
+  const float w = static_cast<float>(model.image.cols), h = static_cast<float>(model.image.rows);
+  const std::vector<cv::Point2f> corners = {{0.f, 0.f}, {w, 0.f}, {0.f, h}};
+  std::vector<cv::Point2f> placed;
+  for (const cv::Point2f& p : corners)
+    placed.push_back(on_face(model, p));
+  cv::warpAffine(model.image, frame, cv::getAffineTransform(corners, placed), frame.size(),
+                 cv::INTER_LINEAR, cv::BORDER_TRANSPARENT);
   const int from = std::clamp(static_cast<int>(seen_to), 0, frame.cols);
   frame(cv::Rect(from, 0, frame.cols - from, frame.rows)).setTo(cv::Scalar(128));
   frame(cv::Rect(0, 0, 60, 60)).setTo(cv::Scalar(10));
