@@ -26,6 +26,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
 
 namespace pickdetect {
 namespace {
@@ -115,7 +116,8 @@ bool operator==(const Settings& a, const Settings& b) {
          a.features == b.features && a.detection_scale == b.detection_scale &&
          a.contrast_threshold == b.contrast_threshold &&
          a.ransac_reprojection_px == b.ransac_reprojection_px &&
-         a.pick_whole_in_view == b.pick_whole_in_view;
+         a.pick_whole_in_view == b.pick_whole_in_view && a.motion_blur_x == b.motion_blur_x &&
+         a.motion_blur_y == b.motion_blur_y;
 }
 
 double frame_contrast_threshold(const cv::Mat& grey, const Settings& settings, double print_share) {
@@ -233,6 +235,12 @@ Detection Detector::detect_scene(const Features& scene, const cv::Size& frame_si
 Detection Detector::detect_matched(const Features& scene, const std::vector<Match>& matches,
                                    const cv::Size& frame_size, const Settings& s,
                                    const cv::Mat& grey, const cv::Mat& colour) const {
+  const double length = std::hypot(s.motion_blur_x, s.motion_blur_y);
+  if (!(length <= kMaxMotionBlurPx))
+    throw Error("Settings::motion_blur_x and motion_blur_y must be finite and at most " +
+                std::to_string(static_cast<int>(kMaxMotionBlurPx)) + " pixels long together (got " +
+                std::to_string(length) + ")");
+  const cv::Point2f blur(static_cast<float>(s.motion_blur_x), static_cast<float>(s.motion_blur_y));
   Detection result;
   result.scene_keypoints = static_cast<int>(scene.keypoints.size());
   result.matches = static_cast<int>(matches.size());
@@ -255,10 +263,10 @@ Detection Detector::detect_matched(const Features& scene, const std::vector<Matc
     // before they compete for the frame's keypoints.
     if (!colour.empty())
       detail::decide_by_colour(result.instances, models_, colour);
-    detail::explain_scene(result.instances, models_, scene, s.features, fewest, grey);
+    detail::explain_scene(result.instances, models_, scene, s.features, fewest, grey, blur);
     detail::place_repeated_designs(
         result.instances, models_,
-        s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift, grey);
+        s.features == FeatureKind::Orb ? matchers_->orb : matchers_->sift, grey, blur);
     detail::drop_look_alikes(result.instances, fewest / 2 + fewest % 2); // half, rounded up
     drop_hidden_instances(result.instances, models_, s.features);
   }
@@ -274,7 +282,7 @@ Detection Detector::detect_matched(const Features& scene, const std::vector<Matc
   if (s.max_instances > 0 && static_cast<int>(result.instances.size()) > s.max_instances)
     result.instances.resize(s.max_instances);
   assess_occlusion(result.instances, models_, frame_size, grey, colour, s.features,
-                   s.pick_whole_in_view);
+                   s.pick_whole_in_view, blur);
   result.timings.clustering_ms = ms_since(t);
   return result;
 }

@@ -265,6 +265,17 @@ bool inside_outline(const Instance& instance, const cv::Point2f& p) {
   return cv::pointPolygonTest(instance.outline, p, true) >= -kOutlineSlack;
 }
 
+/// `s` with the belt's motion blur, where it is measured (else as given): the detector's checks
+/// of the frame's pixels compare the models' pictures blurred as the frame is.
+Settings with_motion_blur(const Settings& s, const cv::Point2f& blur) {
+  Settings out = s;
+  if (cv::norm(blur) >= detail::kLeastBlurPx) {
+    out.motion_blur_x = blur.x;
+    out.motion_blur_y = blur.y;
+  }
+  return out;
+}
+
 } // namespace
 
 void FeatureReuse::reset() {
@@ -306,7 +317,7 @@ Detection FeatureReuse::detect_whole(const Detector& detector, const cv::Mat& gr
   t = Clock::now();
   matches_ = detector.match(features_, s);
   const double matching_ms = ms_since(t);
-  detection_ = detector.detect(grey, features_, matches_, s, colour);
+  detection_ = detector.detect(grey, features_, matches_, with_motion_blur(s, belt_blur()), colour);
   detection_.timings.features_ms = features_ms;
   detection_.timings.matching_ms = matching_ms;
   detector_ = &detector;
@@ -585,7 +596,7 @@ Detection FeatureReuse::detect(const Detector& detector, const cv::Mat& grey, co
   grey.copyTo(last_grey_);
   const std::vector<Instance> last_instances = std::move(detection_.instances);
   const std::vector<Motion> last_motions = std::move(motions_);
-  detection_ = detector.detect(grey, features_, matches_, s, colour);
+  detection_ = detector.detect(grey, features_, matches_, with_motion_blur(s, belt_blur()), colour);
   detection_.timings.features_ms = features_ms;
   detection_.timings.matching_ms = matching_ms;
   // Each instance's motion, for the next frame: that of the last frame's instance it is. One

@@ -2,6 +2,7 @@
 #include "foreign_cover.hpp"
 
 #include "median.hpp"
+#include "motion_blur.hpp"
 #include "object_mask.hpp"
 
 #include <opencv2/imgproc.hpp>
@@ -33,10 +34,12 @@ constexpr int kClipped = 250;
 constexpr double kMinCellFill = 0.75;
 
 /// Per cell: compared pixels, sums of the band-passed frame f and model m (and their squares
-/// and product), and of the shrunk grey levels of both (lf, lm); with colour, the pixels whose
-/// colour is compared (nc) and the sums of the frame's and the model's channels (BGR).
+/// and product), and of the shrunk grey levels of both (lf, lm); the band-passed picture before
+/// any motion blur (t, and its squares), which tells where it has texture; with colour, the
+/// pixels whose colour is compared (nc) and the sums of the frame's and the model's channels
+/// (BGR).
 struct CellSums {
-  double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0, lf = 0, lm = 0;
+  double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0, lf = 0, lm = 0, t = 0, tt = 0;
   double nc = 0;
   cv::Vec3d cf, cm;
 };
@@ -88,11 +91,24 @@ cv::Mat detail_of(const cv::Mat& grey) {
   return twice_boxed(picture, kFineBox) - twice_boxed(picture, kLightBox);
 }
 
+/// `picture` carried by `map` into a window of `size` and blurred by `blur` (window pixels) as
+/// the frame is: warped with a margin of the blur's reach, so that what lies past the window's
+/// edge (the frame's) blurs in as it does in the frame.
+cv::Mat blurred_warp(const cv::Mat& picture, const cv::Matx33d& map, const cv::Size& size,
+                     const cv::Point2f& blur) {
+  const int r = static_cast<int>(std::ceil(std::hypot(blur.x, blur.y) / 2.0)) + 1;
+  const cv::Matx33d shift(1, 0, r, 0, 1, r, 0, 0, 1);
+  cv::Mat wide;
+  cv::warpPerspective(picture, wide, cv::Mat(shift * map), size + cv::Size(2 * r, 2 * r),
+                      cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  return motion_blurred(wide, blur)(cv::Rect(r, r, size.width, size.height)).clone();
+}
+
 } // namespace
 
 CellComparison compare_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
                              const std::vector<const Instance*>& above, const cv::Rect& within,
-                             const cv::Mat& colour) {
+                             const cv::Mat& colour, const cv::Point2f& motion_blur) {
   CellComparison out;
   if (grey.empty() || model.image.empty() || inst.outline.size() < 3)
     return out;
@@ -116,6 +132,13 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
   // Replicated past the picture's edge, so that the band-pass sees no false edge there.
   cv::warpPerspective(model.image, picture, cv::Mat(to_box), size, cv::INTER_LINEAR,
                       cv::BORDER_REPLICATE);
+  // In a frame blurred by motion the print is compared as the frame shows it, blurred the same
+  // way (the blur in shrunk pixels); where it has texture is still told by the picture itself.
+  const bool blurred = std::hypot(motion_blur.x, motion_blur.y) >= kLeastBlurPx;
+  const cv::Point2f blur = motion_blur * static_cast<float>(k);
+  const cv::Mat sharp = picture;
+  if (blurred)
+    picture = blurred_warp(model.image, to_box, size, blur);
   // A model without a mask is all object.
   cv::warpPerspective(object_mask(model.mask, model.image.size()), mask, cv::Mat(to_box), size,
                       cv::INTER_NEAREST, cv::BORDER_CONSTANT);
@@ -141,18 +164,22 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
   cv::Mat shrunk_colour, picture_colour;
   if (frame_in_colour)
     cv::resize(colour(box), shrunk_colour, size, 0, 0, cv::INTER_AREA);
-  if (in_colour)
+  if (in_colour && blurred)
+    picture_colour = blurred_warp(model.colour, to_box, size, blur);
+  else if (in_colour)
     cv::warpPerspective(model.colour, picture_colour, cv::Mat(to_box), size, cv::INTER_LINEAR,
                         cv::BORDER_REPLICATE);
   // Clipped frame pixels (glare) show nothing of what lies there.
   mask.setTo(0, shrunk >= kClipped);
   const cv::Mat frame = detail_of(shrunk), carried = detail_of(picture);
+  const cv::Mat textured = blurred ? detail_of(sharp) : carried;
 
   std::vector<CellSums> cells(static_cast<size_t>(columns) * rows);
   for (int y = 0; y < rows * cell; ++y) {
     const uchar* in = mask.ptr<uchar>(y);
     const float* f = frame.ptr<float>(y);
     const float* m = carried.ptr<float>(y);
+    const float* t = textured.ptr<float>(y);
     const uchar* lf = shrunk.ptr<uchar>(y);
     const uchar* lm = picture.ptr<uchar>(y); // model pictures are 8-bit grey
     const cv::Vec3b* cf = frame_in_colour ? shrunk_colour.ptr<cv::Vec3b>(y) : nullptr;
@@ -175,6 +202,8 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
       c.ff += static_cast<double>(f[x]) * f[x];
       c.mm += static_cast<double>(m[x]) * m[x];
       c.fm += static_cast<double>(f[x]) * m[x];
+      c.t += t[x];
+      c.tt += static_cast<double>(t[x]) * t[x];
       c.lf += lf[x];
       c.lm += lm[x];
     }
@@ -189,9 +218,10 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
     CellLook& l = looks[i];
     const double mf = s.f / s.n, mm = s.m / s.n;
     const double vf = std::max(0.0, s.ff / s.n - mf * mf), vm = s.mm / s.n - mm * mm;
+    const double mt = s.t / s.n, vt = s.tt / s.n - mt * mt; // The picture's own texture.
     l.detail_f = std::sqrt(vf);
     l.detail_m = std::sqrt(std::max(0.0, vm));
-    if (!(vm >= kMinCellTexture * kMinCellTexture)) {
+    if (!(vt >= kMinCellTexture * kMinCellTexture)) {
       l.detail_over_plain = l.detail_f >= kMinDetailOverPlain;
       continue;
     }
@@ -271,8 +301,10 @@ bool denies_print(const CellLook& l, const CellComparison& cmp) {
 }
 
 int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                        const std::vector<const Instance*>& above, const cv::Mat& colour) {
-  const CellComparison cmp = compare_cells(inst, model, grey, above, cv::Rect(), colour);
+                        const std::vector<const Instance*>& above, const cv::Mat& colour,
+                        const cv::Point2f& motion_blur) {
+  const CellComparison cmp =
+      compare_cells(inst, model, grey, above, cv::Rect(), colour, motion_blur);
   const int rows = cmp.rows, columns = cmp.columns;
   if (rows <= 0 || columns <= 0)
     return 0;

@@ -103,11 +103,14 @@ struct CellComparison {
 /// model's mask, near the edge of what is seen of it, under one of `above` or clipped are not
 /// compared. A non-empty `within` (frame pixels) limits the comparison to that rectangle. With
 /// `colour` (the frame in BGR, CV_8UC3 of the grey frame's size) and a model picture in colour,
-/// each cell's colour is compared too (CellLook::other_colour).
+/// each cell's colour is compared too (CellLook::other_colour). With a `motion_blur` of the frame
+/// (Settings::motion_blur_x, motion_blur_y) of kLeastBlurPx or more, the picture is compared as the
+/// frame shows it: blurred the same way (which cells are compared is still told by the picture's
+/// own texture: where the blur leaves a textured print plain, a flat cell denies nothing).
 CellComparison compare_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
                              const std::vector<const Instance*>& above,
-                             const cv::Rect& within = cv::Rect(),
-                             const cv::Mat& colour = cv::Mat());
+                             const cv::Rect& within = cv::Rect(), const cv::Mat& colour = cv::Mat(),
+                             const cv::Point2f& motion_blur = cv::Point2f());
 
 /// Whether a cell shows the print: compared, textured in the frame, and correlating at
 /// kMaxForeignCorrelation or more with the picture carried there.
@@ -142,8 +145,10 @@ bool denies_print(const CellLook& look, const CellComparison& cmp);
 /// glare; an object lying on the instance leaves a connected group. `grey`: the frame, CV_8UC1;
 /// `colour`, if not empty, the frame in BGR: a cell whose colour is another than the print's
 /// (CellLook::other_colour) also shows something else, wherever the print is, plain or not.
+/// `motion_blur`: the frame's, as compare_cells takes it.
 int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
                         const std::vector<const Instance*>& above,
-                        const cv::Mat& colour = cv::Mat());
+                        const cv::Mat& colour = cv::Mat(),
+                        const cv::Point2f& motion_blur = cv::Point2f());
 
 } // namespace pickdetect::detail

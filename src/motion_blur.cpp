@@ -136,6 +136,22 @@ cv::Mat line_kernel(const cv::Point2f& direction, double length) {
   return k / samples;
 }
 
+/// `picture` blurred along `direction` (a unit vector) by a centred box of `length` pixels, its
+/// border replicated; under a pixel, as it is.
+cv::Mat blurred_along(const cv::Mat& picture, const cv::Point2f& direction, double length) {
+  if (length < 1.0)
+    return picture;
+  // Only the kernel's nonzero rows and columns (one row along the rows): filter2D's cost
+  // follows the kernel's area.
+  const cv::Mat kernel = line_kernel(direction, length);
+  const cv::Rect used = cv::boundingRect(kernel != 0);
+  cv::Mat blurred;
+  cv::filter2D(picture, blurred, -1, kernel(used),
+               cv::Point(kernel.cols / 2 - used.x, kernel.rows / 2 - used.y), 0,
+               cv::BORDER_REPLICATE);
+  return blurred;
+}
+
 /// Normalised correlation of `a` and `b` (CV_32F) over `mask`.
 double correlation(const cv::Mat& a, const cv::Mat& b, const cv::Mat& mask) {
   cv::Scalar ma, sa, mb, sb;
@@ -203,17 +219,7 @@ std::optional<double> measure_blur_length(const cv::Mat& grey, const Model& mode
   const cv::Point2f direction(static_cast<float>(step.x / longest),
                               static_cast<float>(step.y / longest));
   auto blurred_by = [&](const cv::Mat& f, double length) {
-    if (length < 1.0)
-      return f;
-    // Only the kernel's nonzero rows and columns (one row along the rows): filter2D's cost
-    // follows the kernel's area.
-    const cv::Mat kernel = line_kernel(direction, length);
-    const cv::Rect used = cv::boundingRect(kernel != 0);
-    cv::Mat blurred;
-    cv::filter2D(f, blurred, -1, kernel(used),
-                 cv::Point(kernel.cols / 2 - used.x, kernel.rows / 2 - used.y), 0,
-                 cv::BORDER_REPLICATE);
-    return blurred;
+    return blurred_along(f, direction, length);
   };
   // The length whose box blur of the picture is most like the frame's pixels (normalised
   // correlation of their detail, the light's slow changes left out): sensor noise and a
@@ -251,6 +257,16 @@ std::optional<double> measure_blur_length(const cv::Mat& grey, const Model& mode
   if (correlation(blurred_by(drawn, best_length), seen, mask) < least_correlation)
     return std::nullopt;
   return best_length;
+}
+
+cv::Mat motion_blurred(const cv::Mat& picture, const cv::Point2f& blur) {
+  const double length = std::hypot(blur.x, blur.y);
+  if (!(length >= 1.0))
+    return picture;
+  return blurred_along(
+      picture,
+      cv::Point2f(static_cast<float>(blur.x / length), static_cast<float>(blur.y / length)),
+      length);
 }
 
 cv::Mat undo_motion_blur(const cv::Mat& grey, const cv::Point2f& blur) {

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
-// Internal to the core: the motion blur of a moving belt, measured on an instance and undone
-// before SIFT (FeatureReuse).
+// Internal to the core: the motion blur of a moving belt, measured on an instance, undone
+// before SIFT (FeatureReuse) and laid on model pictures compared with the frame.
 #pragma once
 
 #include <pickdetect/model.hpp>
@@ -30,5 +30,10 @@ std::optional<double> measure_blur_length(const cv::Mat& grey, const Model& mode
 /// kernel along it, centred) undone by Wiener deconvolution, row by row along the motion. A
 /// blur shorter than kLeastBlurPx: `grey` as it is.
 cv::Mat undo_motion_blur(const cv::Mat& grey, const cv::Point2f& blur);
+
+/// `picture` (any depth and channels) with a motion blur of `blur` (its direction and length,
+/// pixels: a box kernel along it, centred), its border replicated; a blur shorter than a pixel
+/// leaves it as it is.
+cv::Mat motion_blurred(const cv::Mat& picture, const cv::Point2f& blur);
 
 } // namespace pickdetect::detail

@@ -89,19 +89,20 @@ double correlation(const Instance& inst, const Model& model, const cv::Mat& grey
 
 /// Whether instance `i` is covered and pickable, and how much of it is seen: `above` the
 /// instances lying on it, `hidden` the area they hide, `area` its own (pixels); with
-/// `whole_in_view`, what lies outside the frame counts as hidden for the pick flag. Writes only
-/// instance `i`, reads the others' outlines.
+/// `whole_in_view`, what lies outside the frame counts as hidden for the pick flag; `motion_blur`
+/// the frame's (assess_occlusion). Writes only instance `i`, reads the others' outlines.
 void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Model>& models,
                 const cv::Rect& frame, const cv::Mat& grey, const cv::Mat& colour,
-                const std::vector<size_t>& above, double hidden, double area, bool whole_in_view) {
+                const std::vector<size_t>& above, double hidden, double area, bool whole_in_view,
+                const cv::Point2f& motion_blur) {
   Instance& inst = instances[i];
   inst.covered = area <= 0.0 || hidden > kCoverTolerance * area;
   if (!inst.covered && !grey.empty()) {
     std::vector<const Instance*> on_it;
     for (size_t j : above)
       on_it.push_back(&instances[j]);
-    inst.covered = detail::foreign_cover_cells(inst, models[inst.model], grey, on_it, colour) >=
-                   detail::kMinForeignCells;
+    inst.covered = detail::foreign_cover_cells(inst, models[inst.model], grey, on_it, colour,
+                                               motion_blur) >= detail::kMinForeignCells;
   }
   inst.visibility = 0.0;
   double in_frame = 0.0; // Share of the outline inside the frame.
@@ -220,7 +221,7 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
 
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
                       const cv::Size& frame_size, const cv::Mat& grey, const cv::Mat& colour,
-                      FeatureKind kind, bool whole_in_view) {
+                      FeatureKind kind, bool whole_in_view, const cv::Point2f& motion_blur) {
   if (!grey.empty() && (grey.type() != CV_8UC1 || grey.size() != frame_size))
     throw Error("assess_occlusion: the frame must be an 8-bit grey picture of the frame size");
   if (!colour.empty() && (grey.empty() || colour.type() != CV_8UC3 || colour.size() != frame_size))
@@ -257,7 +258,7 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
   cv::parallel_for_(cv::Range(0, static_cast<int>(n)), [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k)
       assess_one(instances, static_cast<size_t>(k), models, frame, grey, colour, above[k],
-                 hidden[k], area[k], whole_in_view);
+                 hidden[k], area[k], whole_in_view, motion_blur);
   });
 
   std::vector<size_t> order(n);

@@ -21,8 +21,8 @@ struct PrintCells {
 };
 
 PrintCells print_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                       const std::vector<const Instance*>& others) {
-  const CellComparison cmp = compare_cells(inst, model, grey, others);
+                       const std::vector<const Instance*>& others, const cv::Point2f& motion_blur) {
+  const CellComparison cmp = compare_cells(inst, model, grey, others, {}, {}, motion_blur);
   PrintCells out;
   for (const CellLook& look : cmp.looks) {
     out.shown += shows_print(look) ? 1 : 0;
@@ -42,7 +42,8 @@ Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& sh
 } // namespace
 
 void place_repeated_designs(std::vector<Instance>& instances, const std::vector<Model>& models,
-                            const Matcher& matcher, const cv::Mat& grey) {
+                            const Matcher& matcher, const cv::Mat& grey,
+                            const cv::Point2f& motion_blur) {
   if (grey.empty())
     return;
   // Decided for all first, then moved: each decision reads the others' outlines.
@@ -60,7 +61,7 @@ void place_repeated_designs(std::vector<Instance>& instances, const std::vector<
       for (size_t j = 0; j < instances.size(); ++j)
         if (j != static_cast<size_t>(i))
           others.push_back(&instances[j]);
-      const PrintCells own = print_cells(inst, model, grey, others);
+      const PrintCells own = print_cells(inst, model, grey, others, motion_blur);
       const int need = static_cast<int>(
           std::ceil(std::max<double>(kMinShiftGainCells, kMinShiftGainShare * own.shown)));
       const double support = static_cast<double>(inst.support.size());
@@ -69,7 +70,7 @@ void place_repeated_designs(std::vector<Instance>& instances, const std::vector<
         Instance candidate = shifted(inst, model, shift);
         if (count_inside(inst.support, candidate.outline) < kMinShiftSupportShare * support)
           continue;
-        const int denied = print_cells(candidate, model, grey, others).denied;
+        const int denied = print_cells(candidate, model, grey, others, motion_blur).denied;
         if (denied < best) {
           best = denied;
           moved[static_cast<size_t>(i)] = std::move(candidate);

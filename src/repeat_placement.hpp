@@ -29,8 +29,10 @@ constexpr double kMinShiftSupportShare = 0.9;
 /// supporting keypoints on it, and the place where the frame's pixels show the least of
 /// anything else is kept: the true place predicts print only where the
 /// object is, a shifted one predicts a copy where the belt, the tote or another object shows.
-/// `grey`: the frame, CV_8UC1; empty: nothing is moved.
+/// `grey`: the frame, CV_8UC1; empty: nothing is moved; `motion_blur`: the frame's
+/// (compare_cells).
 void place_repeated_designs(std::vector<Instance>& instances, const std::vector<Model>& models,
-                            const Matcher& matcher, const cv::Mat& grey);
+                            const Matcher& matcher, const cv::Mat& grey,
+                            const cv::Point2f& motion_blur = cv::Point2f());
 
 } // namespace pickdetect::detail

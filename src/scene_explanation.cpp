@@ -164,9 +164,12 @@ double spread_of(const Instance& inst, const Model& model, const std::vector<int
 }
 
 /// Where the print of a kept instance shows in the frame (CV_8UC1, 255), painted as the test
-/// below needs it: each kept instance over each candidate's box, once.
+/// below needs it: each kept instance over each candidate's box, once; in a frame of
+/// `motion_blur` (compare_cells).
 class ShownPrint {
 public:
+  explicit ShownPrint(const cv::Point2f& motion_blur) : blur_(motion_blur) {}
+
   const cv::Mat& around(const std::vector<Instance>& instances, size_t i,
                         const std::vector<char>& keep, const std::vector<Model>& models,
                         const cv::Mat& grey) {
@@ -181,7 +184,7 @@ public:
       if (overlap.empty())
         continue;
       const CellComparison cells =
-          compare_cells(instances[j], models[instances[j].model], grey, {}, overlap);
+          compare_cells(instances[j], models[instances[j].model], grey, {}, overlap, {}, blur_);
       for (int r = 0; r < cells.rows; ++r)
         for (int c = 0; c < cells.columns; ++c) {
           const CellLook& look = cells.looks[static_cast<size_t>(r) * cells.columns + c];
@@ -196,6 +199,7 @@ public:
   }
 
 private:
+  cv::Point2f blur_;
   cv::Mat shown_;
 };
 
@@ -233,7 +237,8 @@ bool instance_shows_print(const std::vector<Instance>& instances, size_t i,
 } // namespace
 
 void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& models,
-                   const Features& scene, FeatureKind kind, int min_matches, const cv::Mat& grey) {
+                   const Features& scene, FeatureKind kind, int min_matches, const cv::Mat& grey,
+                   const cv::Point2f& motion_blur) {
   const size_t n = instances.size();
   if (n == 0 || scene.keypoints.empty())
     return;
@@ -303,12 +308,12 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
                     static_cast<double>(explains[i].size()) < kMinExplainedShare * on_outline[i]);
       if (placed[i] && !grey.empty() && explains[i].size() < kPixelCheckBelow &&
           explains[i].size() >= static_cast<size_t>(std::max(min_matches, 0)))
-        cells[i] = compare_cells(inst, model, grey, {});
+        cells[i] = compare_cells(inst, model, grey, {}, {}, {}, motion_blur);
     }
   });
   std::vector<int> taken(scene.keypoints.size(), 0);
   std::vector<char> keep(n, 0);
-  ShownPrint shown;
+  ShownPrint shown(motion_blur);
   // The frame's exposure matters only to faces of guided matching (kMinGuidedExposure).
   const bool lit = !grey.empty() &&
                    std::any_of(instances.begin(), instances.end(),

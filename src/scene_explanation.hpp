@@ -19,11 +19,11 @@ namespace pickdetect::detail {
 /// that rests on few matches must also explain more than the chance share of the keypoints on
 /// its outline (a few agree by chance wherever the frame is dense with print); one that explains
 /// few keypoints must also show its print in the frame's pixels where it is seen (`grey`, the
-/// frame as CV_8UC1; empty: no such test). A copy
+/// frame as CV_8UC1; empty: no such test; `motion_blur`, the frame's, compare_cells). A copy
 /// of an instance shifted along a repeated design, a second pose of one object and an instance
 /// spanning two neighbours rest on keypoints that a better instance explains, and lose to it.
 void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& models,
                    const Features& scene, FeatureKind kind, int min_matches,
-                   const cv::Mat& grey = cv::Mat());
+                   const cv::Mat& grey = cv::Mat(), const cv::Point2f& motion_blur = cv::Point2f());
 
 } // namespace pickdetect::detail

@@ -64,7 +64,19 @@ struct Settings {
   /// False: half of it in view is enough (kMinPickableVisibility), as for a box cut by the edge
   /// of a camera that sees the whole work area.
   bool pick_whole_in_view = false;
+  /// The frame's motion blur, where it is known: its direction and length in frame pixels, x
+  /// and y (a belt's travel in one frame times the share of the frame time the shutter is
+  /// open). The checks of the frame's pixels (what lies on an instance, whether its print is
+  /// seen) then compare each model's picture blurred the same way, so that the blur alone does
+  /// not make a free box look covered. (0, 0): a sharp frame; a blur under 2 pixels counts as
+  /// none. At most kMaxMotionBlurPx long. FeatureReuse (the element with tracking) measures it
+  /// on a belt and sets it itself.
+  double motion_blur_x = 0.0;
+  double motion_blur_y = 0.0;
 };
+
+/// The longest motion blur (Settings::motion_blur_x, motion_blur_y) detect takes, in pixels.
+constexpr double kMaxMotionBlurPx = 256.0;
 
 /// Whether two settings agree in every field (a field added to Settings is added here too).
 PICKDETECT_API bool operator==(const Settings& a, const Settings& b);

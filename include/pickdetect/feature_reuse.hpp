@@ -34,20 +34,21 @@ struct ReuseStats {
 /// explained. When the instances moved together (a belt), the motion blur they carry is
 /// measured on one of them (its model's picture blurred along the motion against the frame)
 /// and undone (Wiener deconvolution along the motion) on every frame SIFT runs on after: a
-/// whole frame and the crops. Around the changed blocks nothing explains (objects coming into view,
-/// taken away, turned), SIFT runs on crops wide enough that the keypoints it gives there are those
-/// of the whole frame, and every keypoint whose descriptor reaches into such a block is replaced.
-/// An instance coming into view across the frame's edge rides in with the keypoints it had;
-/// each time 0.4 more of its box is in view than when they were extracted, what came into view
-/// since, and its keypoints whose windows the edge cut, are extracted again.
-/// An instance riding out across the frame's edge is followed out, also once it is no longer
-/// found and through a whole frame: what is left of it in view moves by its motion (by its last
-/// step once ECC no longer follows it, by the belt's after a whole frame) instead of being
-/// extracted again each frame.
-/// The matching runs on the new keypoints only; voting, poses, look-alikes and occlusion run on all
-/// of them, on the frame's pixels. A frame in which nothing changed gets the last detection.
-/// Every `whole_interval`-th frame, a frame of another size, contrast threshold, detector or
-/// settings, ORB and detection-scale < 1 are detected whole, exactly as Detector::detect does.
+/// whole frame and the crops; the checks of the frame's pixels (what lies on an instance) then
+/// compare the models' pictures blurred the same way (Settings::motion_blur_x, motion_blur_y).
+/// Around the changed blocks nothing explains (objects coming into view, taken away, turned), SIFT
+/// runs on crops wide enough that the keypoints it gives there are those of the whole frame, and
+/// every keypoint whose descriptor reaches into such a block is replaced. An instance coming into
+/// view across the frame's edge rides in with the keypoints it had; each time 0.4 more of its box
+/// is in view than when they were extracted, what came into view since, and its keypoints whose
+/// windows the edge cut, are extracted again. An instance riding out across the frame's edge is
+/// followed out, also once it is no longer found and through a whole frame: what is left of it in
+/// view moves by its motion (by its last step once ECC no longer follows it, by the belt's after a
+/// whole frame) instead of being extracted again each frame. The matching runs on the new keypoints
+/// only; voting, poses, look-alikes and occlusion run on all of them, on the frame's pixels. A
+/// frame in which nothing changed gets the last detection. Every `whole_interval`-th frame, a frame
+/// of another size, contrast threshold, detector or settings, ORB and detection-scale < 1 are
+/// detected whole, exactly as Detector::detect does.
 class PICKDETECT_API FeatureReuse {
 public:
   /// `whole_interval`: every so many frames one is detected whole (1: every frame, no reuse).

@@ -65,10 +65,13 @@ void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>
 /// colour is another than its print's is something else lying on it, also where the print is
 /// plain. With `whole_in_view`, an instance is also pickable only when no more than
 /// kCoverTolerance of its outline lies outside the frame: what lies on a part the camera does not
-/// see is not known (Settings::pick_whole_in_view). Throws Error when `colour` is given without
-/// `grey` or is not 8-bit BGR of the frame size.
+/// see is not known (Settings::pick_whole_in_view). With the frame's `motion_blur`
+/// (Settings::motion_blur_x, motion_blur_y), each model's picture is compared with the frame
+/// blurred the same way. Throws Error when `colour` is given without `grey` or is not 8-bit BGR of
+/// the frame size.
 void assess_occlusion(std::vector<Instance>& instances, const std::vector<Model>& models,
                       const cv::Size& frame_size, const cv::Mat& grey, const cv::Mat& colour,
-                      FeatureKind kind = FeatureKind::Sift, bool whole_in_view = false);
+                      FeatureKind kind = FeatureKind::Sift, bool whole_in_view = false,
+                      const cv::Point2f& motion_blur = cv::Point2f());
 
 } // namespace pickdetect

@@ -162,6 +162,32 @@ TEST(FeatureReuse, BeltMotionBlurIsUndoneSoThatBlurredBoxesAreFound) {
   EXPECT_GT(missed_frame_by_frame, 0) << "the blur hides no box from frame-by-frame detection";
 }
 
+TEST(FeatureReuse, FreeBoxesOnABlurredBeltArePickableOnceTheBlurIsMeasured) {
+  const Detector& detector = test_scene::box_detector();
+  FeatureReuse reuse(30);
+  // Two boxes apart, nothing on them, riding right 25 px a frame and blurred by 20 px (the
+  // shutter open most of the frame time): compared with its sharp picture, the smeared print
+  // looks like something lying on a box.
+  auto poses_at = [](int frame) {
+    const float x = 25.f * static_cast<float>(frame);
+    return std::vector<Pose>{Pose{{200.f + x, 220.f}, 20.0, 0.8},
+                             Pose{{220.f + x, 500.f}, 290.0, 0.8}};
+  };
+  for (int frame = 0; frame < 6; ++frame) {
+    const std::vector<Pose> poses = poses_at(frame);
+    const cv::Mat grey = blurred_along_x(scene_with(poses, frame + 1), 20);
+    const Detection got = reuse.detect(detector, grey, Settings());
+    if (frame < 2)
+      continue; // The blur is measured on the boxes the belt carried into frame 1.
+    ASSERT_EQ(got.instances.size(), poses.size()) << "frame " << frame;
+    for (const Instance& i : got.instances) {
+      EXPECT_FALSE(i.covered) << "frame " << frame << ": box at (" << i.center.x << ", "
+                              << i.center.y << ")";
+      EXPECT_TRUE(i.pickable) << "frame " << frame;
+    }
+  }
+}
+
 TEST(FeatureReuse, AnotherPictureIsDetectedWhole) {
   const Detector& detector = test_scene::box_detector();
   FeatureReuse reuse(30);

@@ -15,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <cmath>
+#include <string>
 
 using namespace pickdetect;
 using pickdetect::test_scene::box_detector;
@@ -170,12 +171,13 @@ TEST(Occlusion, ASmallBoxLyingInsideABigOneIsKept) {
 namespace {
 
 /// One box at `pose`, then `draw` over the frame; the instance found nearest the pose.
-template <typename Draw> Instance detect_one(const Pose& pose, Draw&& draw) {
+template <typename Draw>
+Instance detect_one(const Pose& pose, Draw&& draw, const Settings& settings = Settings()) {
   const cv::Mat picture = box_picture();
   cv::Mat scene = test_scene::plain_background({800, 600});
   test_scene::paste(scene, picture, {pose});
   draw(scene);
-  const Detection d = box_detector().detect(scene);
+  const Detection d = box_detector().detect(scene, settings);
   EXPECT_EQ(d.instances.size(), 1u);
   return d.instances.empty() ? Instance() : d.instances[0];
 }
@@ -257,6 +259,72 @@ TEST(Occlusion, MotionBlurOnABoxDoesNotCoverIt) {
       detect_one(kLonePose, [](cv::Mat& s) { cv::blur(s, s, cv::Size(11, 1)); });
   EXPECT_FALSE(blurred.covered);
   EXPECT_TRUE(blurred.pickable);
+}
+
+/// A belt's blur of `length` pixels along the frame's rows, and the settings that know it.
+void belt_blur(cv::Mat& scene, int length) {
+  cv::blur(scene, scene, cv::Size(length, 1));
+}
+Settings knowing_blur(double length) {
+  Settings s;
+  s.motion_blur_x = length;
+  return s;
+}
+
+TEST(Occlusion, ABoxUnderALongBlurTheDetectorKnowsIsNotCovered) {
+  // 25 pixels of blur (a fast belt, the shutter open most of the frame): the print's detail is
+  // smeared along the rows. Compared with the sharp picture, the smear looks like something
+  // else lying on the box; compared with the picture blurred as the frame is, it is the print.
+  const auto blur = [](cv::Mat& s) { belt_blur(s, 25); };
+  const Instance unknown = detect_one(kLonePose, blur);
+  ASSERT_GE(unknown.matches, 10);
+  EXPECT_TRUE(unknown.covered) << "the sharp picture no longer tells a blurred box from a cover";
+  const Instance known = detect_one(kLonePose, blur, knowing_blur(25.0));
+  EXPECT_FALSE(known.covered);
+  EXPECT_TRUE(known.pickable);
+}
+
+TEST(Occlusion, ACardOnABoxIsSeenThroughALongBlurTheDetectorKnows) {
+  const Instance free = detect_one(kLonePose, [](cv::Mat&) {});
+  ASSERT_FALSE(free.covered);
+  // A striped card and a plain lid over the box's print, then the same 25 pixels of blur: the
+  // print blurred as the frame is still shows neither.
+  const cv::Point centre = in_frame(free, {200.0, 100.0});
+  const Instance carded = detect_one(
+      kLonePose,
+      [&](cv::Mat& s) {
+        striped_card(s, centre, 60);
+        belt_blur(s, 25);
+      },
+      knowing_blur(25.0));
+  EXPECT_TRUE(carded.covered) << "a striped card lies on the box";
+  EXPECT_FALSE(carded.pickable);
+  const Instance lidded = detect_one(
+      kLonePose,
+      [](cv::Mat& s) {
+        cv::ellipse(s, {480, 340}, {36, 28}, 30.0, 0.0, 360.0, cv::Scalar(90), cv::FILLED);
+        belt_blur(s, 25);
+      },
+      knowing_blur(25.0));
+  EXPECT_TRUE(lidded.covered) << "a plain lid lies on the box";
+  EXPECT_FALSE(lidded.pickable);
+}
+
+TEST(Occlusion, AMotionBlurThatIsNoLengthIsRefusedByName) {
+  const cv::Mat picture = box_picture();
+  cv::Mat scene = test_scene::plain_background({800, 600});
+  test_scene::paste(scene, picture, {kLonePose});
+  for (const cv::Point2d blur : {cv::Point2d(std::nan(""), 0.0), cv::Point2d(0.0, 300.0)}) {
+    Settings s;
+    s.motion_blur_x = blur.x;
+    s.motion_blur_y = blur.y;
+    try {
+      box_detector().detect(scene, s);
+      FAIL() << "a motion blur of (" << blur.x << ", " << blur.y << ") was taken";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("motion_blur_x"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(Occlusion, GlareAndSpeckleOnABoxDoNotCoverIt) {
