@@ -5,6 +5,7 @@
 #include "descriptor_distance.hpp"
 #include "foreign_cover.hpp"
 #include "keypoint_grid.hpp"
+#include "median.hpp"
 #include "model_scene.hpp"
 #include "point_grid.hpp"
 #include "polygon.hpp"
@@ -18,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <optional>
 
@@ -86,6 +88,14 @@ constexpr double kMinGuidedExposure = 0.5;
 /// millisecond an instance, and kept instances are compared where they overlap it); one that
 /// explains more has shown its print keypoint by keypoint. The ghosts above explained 11-32.
 constexpr size_t kPixelCheckBelow = 64;
+/// How much of a print's detail the frame keeps (its blur and exposure,
+/// CellComparison::detail_kept) is the camera's, the same for every object in it; an instance on
+/// few keypoints measures it on its own few cells that match its print, and a false one's match
+/// by chance (a cartoon's ghost riding a dim belt on 7 keypoints read 0.19-0.21, where the
+/// frame's true instances read 0.67 and more, so that the plain belt under it denied nothing).
+/// For that test an instance's own measure is taken no lower than the median over the instances
+/// that explain kPixelCheckBelow keypoints or more and show their print in this many cells.
+constexpr int kMinKeptPrintCells = 8;
 /// An instance that guided matching completed (voting.cpp) rests on descriptors that agree
 /// with a model only where its pose puts them, no ratio test: where more than this share of
 /// its outline lies on an instance already kept, its pairs are that instance's print read as
@@ -234,6 +244,41 @@ bool instance_shows_print(const std::vector<Instance>& instances, size_t i,
          print >= kMinGuidedPrintShare * compared;
 }
 
+/// The comparisons of `cells` (those made) with their detail kept taken no lower than the
+/// frame's: the median over the `placed` instances that explain kPixelCheckBelow keypoints or
+/// more (`explains`), compared here, that show their print in kMinKeptPrintCells cells or more
+/// (kMinKeptPrintCells). Nothing changes without such an instance.
+void lift_detail_kept(std::vector<std::optional<CellComparison>>& cells,
+                      const std::vector<Instance>& instances, const std::vector<Model>& models,
+                      const std::vector<std::vector<int>>& explains,
+                      const std::vector<char>& placed, const cv::Mat& grey,
+                      const cv::Point2f& motion_blur) {
+  if (std::none_of(cells.begin(), cells.end(), [](const auto& c) { return c.has_value(); }))
+    return;
+  std::vector<size_t> strong;
+  for (size_t i = 0; i < instances.size(); ++i)
+    if (placed[i] && explains[i].size() >= kPixelCheckBelow)
+      strong.push_back(i);
+  std::vector<double> kept(strong.size(), std::numeric_limits<double>::quiet_NaN());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(strong.size())), [&](const cv::Range& r) {
+    for (int k = r.start; k < r.end; ++k) {
+      const Instance& inst = instances[strong[static_cast<size_t>(k)]];
+      const CellComparison c = compare_cells(inst, models[static_cast<size_t>(inst.model)], grey,
+                                             {}, {}, {}, motion_blur);
+      if (c.print_cells >= kMinKeptPrintCells)
+        kept[static_cast<size_t>(k)] = c.detail_kept;
+    }
+  });
+  kept.erase(std::remove_if(kept.begin(), kept.end(), [](double v) { return std::isnan(v); }),
+             kept.end());
+  if (kept.empty())
+    return;
+  const double frame = median(kept);
+  for (std::optional<CellComparison>& c : cells)
+    if (c && !(c->detail_kept >= frame))
+      c->detail_kept = frame;
+}
+
 } // namespace
 
 void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& models,
@@ -311,6 +356,7 @@ void explain_scene(std::vector<Instance>& instances, const std::vector<Model>& m
         cells[i] = compare_cells(inst, model, grey, {}, {}, {}, motion_blur);
     }
   });
+  lift_detail_kept(cells, instances, models, explains, placed, grey, motion_blur);
   std::vector<int> taken(scene.keypoints.size(), 0);
   std::vector<char> keep(n, 0);
   ShownPrint shown(motion_blur);

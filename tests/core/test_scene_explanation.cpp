@@ -312,3 +312,51 @@ TEST(SceneExplanation, AnAffineMapLargerThanItsKeypointsSizesDoesNotPlaceAFace) 
 }
 
 } // namespace
+
+TEST(SceneExplanation, AFewKeypointsOnPlainGroundAreJudgedByTheFramesDetail) {
+  // Left: one box. Right: plain ground where four pieces of the box's print (50 px) lie just
+  // where one pose of the box would put them: a pose on a handful of keypoints with nothing of
+  // the box between them. In the frame's pixels the pieces are faint (0.3 of their contrast,
+  // as a chance likeness is): measured on them alone, the frame would keep so little of
+  // the print's detail that the plain ground under the pose denies nothing. The box beside it
+  // shows how much the frame keeps, and that the ground is no print.
+  const Model& model = box_model();
+  const cv::Size frame(2 * model.image.cols + 240, model.image.rows + 160);
+  cv::Mat scene = test_scene::plain_background(frame, 90);
+  const std::vector<Pose> poses = {{{80.f + model.image.cols / 2.f, frame.height / 2.f}, 0.0, 1.0}};
+  test_scene::paste(scene, model.image, poses);
+  const cv::Point offset(200 + model.image.cols, 80);
+  const int piece = 50;
+  std::vector<cv::Rect> pieces;
+  for (const cv::Point corner : {cv::Point(10, 10), cv::Point(model.image.cols - 80, 10),
+                                 cv::Point(10, model.image.rows - 80),
+                                 cv::Point(model.image.cols - 80, model.image.rows - 80)}) {
+    const cv::Rect from(corner, cv::Size(piece, piece));
+    model.image(from).copyTo(scene(from + offset));
+    pieces.push_back(from + offset);
+  }
+  const Features features = extract_features(scene);
+  cv::Mat grey = scene.clone();
+  for (const cv::Rect& r : pieces) {
+    cv::Mat faint;
+    scene(r).convertTo(faint, CV_8U, 0.3, 0.7 * 90);
+    faint.copyTo(grey(r));
+  }
+  std::vector<Instance> found = box_detector().detect(features, scene.size()).instances;
+  const Instance* box = nearest(found, poses[0].center);
+  ASSERT_NE(box, nullptr);
+  ASSERT_LT(cv::norm(box->center - poses[0].center), 1.5);
+  const cv::Point2f ghost_centre(offset.x + model.image.cols / 2.f,
+                                 offset.y + model.image.rows / 2.f);
+  const cv::Point2f shift = ghost_centre - box->center;
+  Instance ghost = moved(*box, cv::Matx33d(1, 0, shift.x, 0, 1, shift.y, 0, 0, 1));
+  ghost.matches = 6;
+  // Alone, the pose is kept: nothing in the frame says how much detail it keeps.
+  std::vector<Instance> alone = {ghost};
+  detail::explain_scene(alone, box_detector().models(), features, FeatureKind::Sift, 4, grey);
+  ASSERT_EQ(alone.size(), 1u) << "the pose alone must stand for this test to tell anything";
+  std::vector<Instance> instances = {*box, ghost};
+  detail::explain_scene(instances, box_detector().models(), features, FeatureKind::Sift, 4, grey);
+  ASSERT_EQ(instances.size(), 1u) << "the pose over plain ground must be dropped, the box kept";
+  EXPECT_LT(cv::norm(instances[0].center - poses[0].center), 1.5);
+}
