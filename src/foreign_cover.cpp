@@ -34,10 +34,10 @@ constexpr int kClipped = 250;
 constexpr double kMinCellFill = 0.75;
 
 /// Per cell: compared pixels, sums of the band-passed frame f and model m (and their squares
-/// and product), and of the shrunk grey levels of both (lf, lm); the band-passed picture before
-/// any motion blur (t, and its squares), which tells where it has texture; with colour, the
-/// pixels whose colour is compared (nc) and the sums of the frame's and the model's channels
-/// (BGR).
+/// and product), and of the shrunk grey levels of both (lf, lm); under a motion blur, the
+/// band-passed picture before it (t, and its squares), which tells where it has texture; with
+/// colour, the pixels whose colour is compared (nc) and the sums of the frame's and the model's
+/// channels (BGR).
 struct CellSums {
   double n = 0, f = 0, m = 0, ff = 0, mm = 0, fm = 0, lf = 0, lm = 0, t = 0, tt = 0;
   double nc = 0;
@@ -172,14 +172,15 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
   // Clipped frame pixels (glare) show nothing of what lies there.
   mask.setTo(0, shrunk >= kClipped);
   const cv::Mat frame = detail_of(shrunk), carried = detail_of(picture);
-  const cv::Mat textured = blurred ? detail_of(sharp) : carried;
+  // Unblurred, the picture's own texture is `carried` itself (its sums m and mm).
+  const cv::Mat textured = blurred ? detail_of(sharp) : cv::Mat();
 
   std::vector<CellSums> cells(static_cast<size_t>(columns) * rows);
   for (int y = 0; y < rows * cell; ++y) {
     const uchar* in = mask.ptr<uchar>(y);
     const float* f = frame.ptr<float>(y);
     const float* m = carried.ptr<float>(y);
-    const float* t = textured.ptr<float>(y);
+    const float* t = blurred ? textured.ptr<float>(y) : nullptr;
     const uchar* lf = shrunk.ptr<uchar>(y);
     const uchar* lm = picture.ptr<uchar>(y); // model pictures are 8-bit grey
     const cv::Vec3b* cf = frame_in_colour ? shrunk_colour.ptr<cv::Vec3b>(y) : nullptr;
@@ -202,8 +203,10 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
       c.ff += static_cast<double>(f[x]) * f[x];
       c.mm += static_cast<double>(m[x]) * m[x];
       c.fm += static_cast<double>(f[x]) * m[x];
-      c.t += t[x];
-      c.tt += static_cast<double>(t[x]) * t[x];
+      if (t) {
+        c.t += t[x];
+        c.tt += static_cast<double>(t[x]) * t[x];
+      }
       c.lf += lf[x];
       c.lm += lm[x];
     }
@@ -218,7 +221,8 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
     CellLook& l = looks[i];
     const double mf = s.f / s.n, mm = s.m / s.n;
     const double vf = std::max(0.0, s.ff / s.n - mf * mf), vm = s.mm / s.n - mm * mm;
-    const double mt = s.t / s.n, vt = s.tt / s.n - mt * mt; // The picture's own texture.
+    const double mt = s.t / s.n; // The picture's own texture:
+    const double vt = blurred ? s.tt / s.n - mt * mt : vm;
     l.detail_f = std::sqrt(vf);
     l.detail_m = std::sqrt(std::max(0.0, vm));
     if (!(vt >= kMinCellTexture * kMinCellTexture)) {

@@ -246,8 +246,8 @@ bool instance_shows_print(const std::vector<Instance>& instances, size_t i,
 
 /// The comparisons of `cells` (those made) with their detail kept taken no lower than the
 /// frame's: the median over the `placed` instances that explain kPixelCheckBelow keypoints or
-/// more (`explains`), compared here, that show their print in kMinKeptPrintCells cells or more
-/// (kMinKeptPrintCells). Nothing changes without such an instance.
+/// more (`explains`), compared here, that show their print in kMinKeptPrintCells cells or more.
+/// Nothing changes without such an instance.
 void lift_detail_kept(std::vector<std::optional<CellComparison>>& cells,
                       const std::vector<Instance>& instances, const std::vector<Model>& models,
                       const std::vector<std::vector<int>>& explains,
