@@ -31,8 +31,13 @@ if [ "${MAKE:-1}" != 0 ]; then
   $S $C --packed 2 --camera 40 --soft-models --glare 6 --scale 0.5-0.55 --aspect 2.5 \
     --family 0.4 --faces 3 -o $O/tote-like-faces $D/box.png $D/fruits.jpg $D/home.jpg \
     $D/starry_night.jpg
+  # A depalletizing cell's front (1280x720): rows of bundles of seven identical packs, three
+  # products, labels and other objects lying on them, glare.
+  $S -n 12 --size 1280x720 --seed ${SEED:-17} --bundle 7 --packed 2 --covers 3 --glare 6 \
+    --scale 0.3-0.36 --mixed-products -o $O/pallet $D/box.png $D/HappyFish.jpg $D/blox.jpg
 fi
-sets="plain packed elongated bundle perspective soft-model faces glare tote-like tote-like-faces"
+sets="plain packed elongated bundle perspective soft-model faces glare tote-like tote-like-faces
+  pallet"
 mkdir -p $O/results
 for s in $sets; do
   $E -o $O/results/$s.jsonl $O/$s >$O/results/$s.txt 2>/dev/null

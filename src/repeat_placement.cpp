@@ -6,29 +6,41 @@
 #include "polygon.hpp"
 
 #include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
 
-#include <algorithm>
-#include <cmath>
 #include <cstddef>
 
 namespace pickdetect::detail {
 namespace {
 
-/// How the frame shows an instance's print, `others` (the other instances, which may lie on it)
-/// left out: cells where it shows the print, and where it shows something else (denies_print).
-struct PrintCells {
-  int shown = 0, denied = 0;
-};
+/// The frame's cells compared with an instance's print, `others` (the other instances, which may
+/// lie on it) left out (compare_cells).
+CellComparison print_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
+                           const std::vector<const Instance*>& others,
+                           const cv::Point2f& motion_blur) {
+  return compare_cells(inst, model, grey, others, {}, {}, motion_blur);
+}
 
-PrintCells print_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                       const std::vector<const Instance*>& others, const cv::Point2f& motion_blur) {
-  const CellComparison cmp = compare_cells(inst, model, grey, others, {}, {}, motion_blur);
-  PrintCells out;
-  for (const CellLook& look : cmp.looks) {
-    out.shown += shows_print(look) ? 1 : 0;
-    out.denied += denies_print(look, cmp) ? 1 : 0;
-  }
-  return out;
+/// How well a place explains the frame where another place of the same design does not
+/// predict it (cells whose centres lie outside `other`, an outline): the cells that show the
+/// print, less those that show something else (denies_print). Where both places predict the
+/// print, a repeated design predicts the same there, and which cells are compared depends
+/// only on how near each outline's edge they lie: no evidence either way.
+int explained_beyond(const CellComparison& cmp, const std::vector<cv::Point2f>& other) {
+  int score = 0;
+  for (int r = 0; r < cmp.rows; ++r)
+    for (int c = 0; c < cmp.columns; ++c) {
+      const CellLook& look = cmp.looks[static_cast<size_t>(r) * cmp.columns + c];
+      if (!look.compared)
+        continue;
+      const cv::Point2f centre(
+          static_cast<float>(cmp.origin.x + kCoverCell * c) + 0.5f * kCoverCell,
+          static_cast<float>(cmp.origin.y + kCoverCell * r) + 0.5f * kCoverCell);
+      if (cv::pointPolygonTest(other, centre, false) >= 0)
+        continue;
+      score += shows_print(look) ? 1 : denies_print(look, cmp) ? -1 : 0;
+    }
+  return score;
 }
 
 Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& shift) {
@@ -61,18 +73,20 @@ void place_repeated_designs(std::vector<Instance>& instances, const std::vector<
       for (size_t j = 0; j < instances.size(); ++j)
         if (j != static_cast<size_t>(i))
           others.push_back(&instances[j]);
-      const PrintCells own = print_cells(inst, model, grey, others, motion_blur);
-      const int need = static_cast<int>(
-          std::ceil(std::max<double>(kMinShiftGainCells, kMinShiftGainShare * own.shown)));
+      const CellComparison own = print_cells(inst, model, grey, others, motion_blur);
       const double support = static_cast<double>(inst.support.size());
-      int best = own.denied - need + 1;
+      int best_gain = kMinShiftGainCells - 1;
       for (const cv::Point2f& shift : shifts) {
         Instance candidate = shifted(inst, model, shift);
         if (count_inside(inst.support, candidate.outline) < kMinShiftSupportShare * support)
           continue;
-        const int denied = print_cells(candidate, model, grey, others, motion_blur).denied;
-        if (denied < best) {
-          best = denied;
+        const CellComparison there = print_cells(candidate, model, grey, others, motion_blur);
+        // Each place judged where only it predicts the print: the true place shows it there,
+        // a shifted one predicts a copy where the belt, the tote or another object shows.
+        const int gain =
+            explained_beyond(there, inst.outline) - explained_beyond(own, candidate.outline);
+        if (gain > best_gain) {
+          best_gain = gain;
           moved[static_cast<size_t>(i)] = std::move(candidate);
           is_moved[static_cast<size_t>(i)] = 1;
         }

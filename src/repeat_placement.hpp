@@ -12,12 +12,12 @@
 
 namespace pickdetect::detail {
 
-/// A candidate place must show something other than the print (denies_print) in at least this
-/// many fewer cells than the instance's own place, and kMinShiftGainShare of the cells where
-/// its own place shows the print: a copy predicted where the belt, the tote or another object
-/// lies denies a whole part's cells; noise and glare deny a few in any place.
+/// A candidate place must explain the frame better than the instance's own place by at least
+/// this many cells, each place judged where the other does not predict the print (cells that
+/// show the print, less cells that show something else): a copy predicted where the belt, the
+/// tote or another object lies denies a whole part's cells; noise and glare deny a few in any
+/// place.
 constexpr int kMinShiftGainCells = 6;
-constexpr double kMinShiftGainShare = 0.05;
 /// A candidate place must keep this share of the instance's supporting keypoints on its outline.
 constexpr double kMinShiftSupportShare = 0.9;
 
@@ -26,9 +26,11 @@ constexpr double kMinShiftSupportShare = 0.9;
 /// instance can come out shifted by a copy or more along the design, its outline running past
 /// the object's end. For each instance of a model with repeat shifts (`matcher`'s
 /// repeat_shifts, model pixels), the instance is moved by each shift that keeps its
-/// supporting keypoints on it, and the place where the frame's pixels show the least of
-/// anything else is kept: the true place predicts print only where the
-/// object is, a shifted one predicts a copy where the belt, the tote or another object shows.
+/// supporting keypoints on it, and the place that best explains the frame's pixels where the
+/// two places differ is kept: the true place predicts print only where the object is, and the
+/// frame shows it there; a shifted one predicts a copy where the belt, the tote or another
+/// object shows, or outside the frame. Where both predict the print, a repeated design predicts
+/// the same: no evidence either way.
 /// `grey`: the frame, CV_8UC1; empty: nothing is moved; `motion_blur`: the frame's
 /// (compare_cells).
 void place_repeated_designs(std::vector<Instance>& instances, const std::vector<Model>& models,

@@ -1,9 +1,12 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // A model whose picture repeats a part (a bundle of identical packs): every copy is a place a
 // scene feature could mean, and the bundle is placed where all its packs agree.
+#include "../../src/model_scene.hpp"
+#include "../../src/repeat_placement.hpp"
 #include "../support/box.hpp"
 #include "common/scene.hpp"
 
+#include <pickdetect/matching.hpp>
 #include <pickdetect/pickdetect.hpp>
 
 #include <gtest/gtest.h>
@@ -18,6 +21,40 @@ using pickdetect::test_scene::bundle_model;
 using pickdetect::test_scene::Pose;
 
 namespace {
+
+/// `inst` moved along its design by `packs` copies of a pack `pack_width` model pixels wide,
+/// keeping only the support its moved outline holds: an instance of a repeated design found
+/// shifted along it, as its votes can leave it.
+Instance shifted_by_packs(const Instance& inst, const Model& model, int packs, double pack_width) {
+  Instance out = inst;
+  const cv::Matx33d by(1, 0, packs * pack_width, 0, 1, 0, 0, 0, 1);
+  detail::place(out, model, inst.homography * by);
+  detail::set_grasp(out, model);
+  out.support.clear();
+  for (const cv::Point2f& p : inst.support)
+    if (cv::pointPolygonTest(out.outline, p, false) >= 0)
+      out.support.push_back(p);
+  return out;
+}
+
+/// A bundle of seven packs lying in a frame of plain belt at `center`, seen straight (the model
+/// without tilted views: its matcher's search for copies grows with the square of its
+/// keypoints), and the instance the detector finds for it (expected at its place).
+struct SevenPacks {
+  Model model = test_scene::bundle_model(7, 0.0);
+  double pack_width = test_scene::box_model().image.cols;
+  Matcher matcher{{model}};
+  cv::Mat scene;
+  Instance found;
+
+  SevenPacks(const cv::Size& frame, const cv::Point2f& center, double scale) {
+    scene = test_scene::plain_background(frame, 100);
+    test_scene::paste(scene, model.image, {{center, 0.0, scale}});
+    const Detection d = Detector({model}).detect(scene);
+    if (d.instances.size() == 1)
+      found = d.instances[0];
+  }
+};
 
 TEST(RepeatedDesign, ABundleOfIdenticalPacksIsFoundWhereAllItsPacksAgree) {
   const Model bundle = bundle_model(3);
@@ -82,6 +119,68 @@ TEST(RepeatedDesign, ABundleRunningOutOfTheFrameIsPlacedWhereItsPacksAre) {
             << where << ": expected the centre at (" << x << ", 240), got (" << inst.center.x
             << ", " << inst.center.y << ")";
       }
+}
+
+TEST(RepeatedDesign, ABundleFoundAPackPastItsEndIntoTheFramesEdgeIsMovedOntoItsPacks) {
+  // Seven packs wholly in view, their end 5 px from the frame's right edge. Found a pack to the
+  // right, the instance's extra pack lies outside the frame, where nothing denies it, and its
+  // other six packs show the print as the true place's do: only the true place's own first
+  // pack, which shows the print, tells them apart.
+  const double scale = 0.3;
+  const cv::Size frame(800, 240);
+  const float half = static_cast<float>(7 * 324 * scale / 2);
+  const cv::Point2f truth(frame.width - 5 - half, 120.f);
+  const SevenPacks bundle(frame, truth, scale);
+  ASSERT_LT(cv::norm(bundle.found.center - truth), 1.5) << "the bundle itself is found in place";
+  for (int packs : {1, 2}) {
+    std::vector<Instance> instances = {
+        shifted_by_packs(bundle.found, bundle.model, packs, bundle.pack_width)};
+    ASSERT_GT(cv::norm(instances[0].center - truth), 90.0);
+    detail::place_repeated_designs(instances, {bundle.model}, bundle.matcher, bundle.scene);
+    EXPECT_LT(cv::norm(instances[0].center - truth), 1.5)
+        << "found " << packs << " pack(s) to the right: expected the centre moved back to ("
+        << truth.x << ", " << truth.y << "), got (" << instances[0].center.x << ", "
+        << instances[0].center.y << ")";
+  }
+}
+
+TEST(RepeatedDesign, ABundleFoundAPackPastItsEndOntoTheBeltIsMovedOntoItsPacks) {
+  // The same seven packs in the middle of the frame, found a pack to either side: the extra
+  // pack lies on the plain belt, which shows none of its print.
+  const double scale = 0.3;
+  const cv::Size frame(1000, 240);
+  const cv::Point2f truth(500.f, 120.f);
+  const SevenPacks bundle(frame, truth, scale);
+  ASSERT_LT(cv::norm(bundle.found.center - truth), 1.5) << "the bundle itself is found in place";
+  for (int packs : {-1, 1}) {
+    std::vector<Instance> instances = {
+        shifted_by_packs(bundle.found, bundle.model, packs, bundle.pack_width)};
+    detail::place_repeated_designs(instances, {bundle.model}, bundle.matcher, bundle.scene);
+    EXPECT_LT(cv::norm(instances[0].center - truth), 1.5)
+        << "found " << packs << " pack(s) along: expected the centre moved back to (" << truth.x
+        << ", " << truth.y << "), got (" << instances[0].center.x << ", " << instances[0].center.y
+        << ")";
+  }
+}
+
+TEST(RepeatedDesign, ABundleRunningOutOfOneEdgeAndNearTheOtherStaysWhereItIs) {
+  // Seven packs, the first outside the frame's left edge and the last ending a third of a pack
+  // from its right edge. Moved a pack to the right, the instance would lose the packs outside
+  // and put its extra pack mostly outside the frame too: no better explanation of what is seen,
+  // though it would take in the print along the bundle's end that the true outline's edge
+  // leaves uncompared.
+  const double scale = 0.3;
+  const float pack = static_cast<float>(324 * scale);
+  const float half = 3.5f * pack;
+  const cv::Point2f truth(half - pack, 120.f);
+  const cv::Size frame(static_cast<int>(truth.x + half + pack / 3), 240);
+  const SevenPacks bundle(frame, truth, scale);
+  ASSERT_LT(cv::norm(bundle.found.center - truth), 1.5) << "the bundle itself is found in place";
+  std::vector<Instance> instances = {bundle.found};
+  detail::place_repeated_designs(instances, {bundle.model}, bundle.matcher, bundle.scene);
+  EXPECT_LT(cv::norm(instances[0].center - truth), 1.5)
+      << "expected the centre left at (" << truth.x << ", " << truth.y << "), got ("
+      << instances[0].center.x << ", " << instances[0].center.y << ")";
 }
 
 } // namespace

@@ -61,12 +61,13 @@ inline Model picture_model(const std::string& name, cv::Mat picture,
   return m;
 }
 
-/// A bundle of `packs` box.png pictures side by side, as one model (a repeated design).
-inline Model bundle_model(int packs) {
+/// A bundle of `packs` box.png pictures side by side, as one model (a repeated design), with
+/// views up to `max_tilt_deg`.
+inline Model bundle_model(int packs, double max_tilt_deg = kDefaultMaxTiltDeg) {
   std::vector<cv::Mat> row(packs, box_model().image);
   cv::Mat picture;
   cv::hconcat(row, picture);
-  return picture_model("bundle", picture);
+  return picture_model("bundle", picture, max_tilt_deg);
 }
 
 inline const Detector& box_detector() {
