@@ -2,6 +2,7 @@
 // FeatureReuse (the element's full-detection-interval): a still scene costs no extraction, a
 // moving box is found where whole-frame detection finds it, a box coming into view is found
 // without a whole frame, a belt's motion blur is undone, a box leaving the frame is followed out.
+#include "../support/belt_blur.hpp"
 #include "../support/box.hpp"
 #include "common/scene.hpp"
 
@@ -15,6 +16,7 @@
 #include <vector>
 
 using namespace pickdetect;
+using pickdetect::test_scene::blurred_along_x;
 using pickdetect::test_scene::Pose;
 
 namespace {
@@ -119,14 +121,6 @@ TEST(FeatureReuse, BoxComingIntoViewIsFoundWithoutAWholeFrame) {
   EXPECT_FALSE(reuse.last().whole);
   EXPECT_LT(reuse.last().extracted_share, 0.6);
   expect_same_instances(got, detector.detect(grey, Settings()), 0.1);
-}
-
-/// `scene` as a camera whose shutter stays open while the belt moves `length` pixels to the
-/// right sees it: a box blur along x.
-cv::Mat blurred_along_x(const cv::Mat& scene, int length) {
-  cv::Mat out;
-  cv::filter2D(scene, out, -1, cv::Mat(1, length, CV_32FC1, cv::Scalar(1.0 / length)));
-  return out;
 }
 
 TEST(FeatureReuse, BeltMotionBlurIsUndoneSoThatBlurredBoxesAreFound) {

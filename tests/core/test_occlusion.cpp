@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Which one to pick: stacks in both orders, three levels, touching neighbours, the frame edge.
+#include "../support/belt_blur.hpp"
 #include "../support/box.hpp"
 #include "common/scene.hpp"
 
@@ -261,10 +262,7 @@ TEST(Occlusion, MotionBlurOnABoxDoesNotCoverIt) {
   EXPECT_TRUE(blurred.pickable);
 }
 
-/// A belt's blur of `length` pixels along the frame's rows, and the settings that know it.
-void belt_blur(cv::Mat& scene, int length) {
-  cv::blur(scene, scene, cv::Size(length, 1));
-}
+/// The settings that know a belt's blur of `length` pixels along the frame's rows.
 Settings knowing_blur(double length) {
   Settings s;
   s.motion_blur_x = length;
@@ -275,7 +273,7 @@ TEST(Occlusion, ABoxUnderALongBlurTheDetectorKnowsIsNotCovered) {
   // 25 pixels of blur (a fast belt, the shutter open most of the frame): the print's detail is
   // smeared along the rows. Compared with the sharp picture, the smear looks like something
   // else lying on the box; compared with the picture blurred as the frame is, it is the print.
-  const auto blur = [](cv::Mat& s) { belt_blur(s, 25); };
+  const auto blur = [](cv::Mat& s) { s = test_scene::blurred_along_x(s, 25); };
   const Instance unknown = detect_one(kLonePose, blur);
   ASSERT_GE(unknown.matches, 10);
   EXPECT_TRUE(unknown.covered) << "the sharp picture no longer tells a blurred box from a cover";
@@ -294,7 +292,7 @@ TEST(Occlusion, ACardOnABoxIsSeenThroughALongBlurTheDetectorKnows) {
       kLonePose,
       [&](cv::Mat& s) {
         striped_card(s, centre, 60);
-        belt_blur(s, 25);
+        s = test_scene::blurred_along_x(s, 25);
       },
       knowing_blur(25.0));
   EXPECT_TRUE(carded.covered) << "a striped card lies on the box";
@@ -303,7 +301,7 @@ TEST(Occlusion, ACardOnABoxIsSeenThroughALongBlurTheDetectorKnows) {
       kLonePose,
       [](cv::Mat& s) {
         cv::ellipse(s, {480, 340}, {36, 28}, 30.0, 0.0, 360.0, cv::Scalar(90), cv::FILLED);
-        belt_blur(s, 25);
+        s = test_scene::blurred_along_x(s, 25);
       },
       knowing_blur(25.0));
   EXPECT_TRUE(lidded.covered) << "a plain lid lies on the box";
