@@ -125,9 +125,10 @@ void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Mo
   const bool grasp_in_frame = inst.grasp.x >= kGraspMarginPx && inst.grasp.y >= kGraspMarginPx &&
                               inst.grasp.x < frame.width - kGraspMarginPx &&
                               inst.grasp.y < frame.height - kGraspMarginPx;
-  // A pose completed by guided matching rests on a few pairs without the ratio test: too
-  // little evidence to send a gripper to.
-  inst.pickable = !inst.covered && !inst.guided && grasp_in_frame &&
+  // A pose completed by guided matching rests on a few pairs without the ratio test, and a
+  // repeated design the frame does not place may be a copy off: too little evidence to send a
+  // gripper to.
+  inst.pickable = !inst.covered && !inst.guided && !inst.place_unsure && grasp_in_frame &&
                   inst.visibility >= kMinPickableVisibility &&
                   (!whole_in_view || 1.0 - in_frame <= kCoverTolerance);
   inst.pick_order = 0;

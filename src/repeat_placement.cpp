@@ -8,7 +8,9 @@
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <algorithm>
 #include <cstddef>
+#include <limits>
 
 namespace pickdetect::detail {
 namespace {
@@ -53,14 +55,55 @@ Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& sh
 
 } // namespace
 
+namespace {
+
+/// The best of an instance's places shifted by a copy, if one explains the frame better by
+/// kMinShiftGainCells, and how nearly the best of those far enough off to matter
+/// (kMinUnsureShiftPx) comes to it (gain over the instance's own place).
+struct ShiftChoice {
+  bool move = false;
+  Instance moved;
+  int rival_gain = std::numeric_limits<int>::min();
+};
+
+ShiftChoice choose_shift(const Instance& inst, const Model& model,
+                         const std::vector<cv::Point2f>& shifts, const cv::Mat& grey,
+                         const std::vector<const Instance*>& others,
+                         const cv::Point2f& motion_blur) {
+  ShiftChoice out;
+  const CellComparison own = print_cells(inst, model, grey, others, motion_blur);
+  const double support = static_cast<double>(inst.support.size());
+  int best_gain = kMinShiftGainCells - 1;
+  for (const cv::Point2f& shift : shifts) {
+    Instance candidate = shifted(inst, model, shift);
+    if (count_inside(inst.support, candidate.outline) < kMinShiftSupportShare * support)
+      continue;
+    const CellComparison there = print_cells(candidate, model, grey, others, motion_blur);
+    // Each place judged where only it predicts the print: the true place shows it there,
+    // a shifted one predicts a copy where the belt, the tote or another object shows.
+    const int gain =
+        explained_beyond(there, inst.outline) - explained_beyond(own, candidate.outline);
+    if (cv::norm(candidate.grasp - inst.grasp) >= kMinUnsureShiftPx)
+      out.rival_gain = std::max(out.rival_gain, gain);
+    if (gain > best_gain) {
+      best_gain = gain;
+      out.moved = std::move(candidate);
+      out.move = true;
+    }
+  }
+  return out;
+}
+
+} // namespace
+
 void place_repeated_designs(std::vector<Instance>& instances, const std::vector<Model>& models,
                             const Matcher& matcher, const cv::Mat& grey,
                             const cv::Point2f& motion_blur) {
   if (grey.empty())
     return;
   // Decided for all first, then moved: each decision reads the others' outlines.
-  std::vector<Instance> moved(instances.size());
-  std::vector<char> is_moved(instances.size(), 0);
+  std::vector<Instance> placed(instances.size());
+  std::vector<char> is_placed(instances.size(), 0);
   cv::parallel_for_(cv::Range(0, static_cast<int>(instances.size())), [&](const cv::Range& r) {
     for (int i = r.start; i < r.end; ++i) {
       const Instance& inst = instances[static_cast<size_t>(i)];
@@ -73,29 +116,19 @@ void place_repeated_designs(std::vector<Instance>& instances, const std::vector<
       for (size_t j = 0; j < instances.size(); ++j)
         if (j != static_cast<size_t>(i))
           others.push_back(&instances[j]);
-      const CellComparison own = print_cells(inst, model, grey, others, motion_blur);
-      const double support = static_cast<double>(inst.support.size());
-      int best_gain = kMinShiftGainCells - 1;
-      for (const cv::Point2f& shift : shifts) {
-        Instance candidate = shifted(inst, model, shift);
-        if (count_inside(inst.support, candidate.outline) < kMinShiftSupportShare * support)
-          continue;
-        const CellComparison there = print_cells(candidate, model, grey, others, motion_blur);
-        // Each place judged where only it predicts the print: the true place shows it there,
-        // a shifted one predicts a copy where the belt, the tote or another object shows.
-        const int gain =
-            explained_beyond(there, inst.outline) - explained_beyond(own, candidate.outline);
-        if (gain > best_gain) {
-          best_gain = gain;
-          moved[static_cast<size_t>(i)] = std::move(candidate);
-          is_moved[static_cast<size_t>(i)] = 1;
-        }
-      }
+      ShiftChoice choice = choose_shift(inst, model, shifts, grey, others, motion_blur);
+      Instance& out = placed[static_cast<size_t>(i)];
+      out = choice.move ? std::move(choice.moved) : inst;
+      // How sure the chosen place is, against its own rivals.
+      if (choice.move)
+        choice = choose_shift(out, model, shifts, grey, others, motion_blur);
+      out.place_unsure = choice.rival_gain > -kMinShiftGainCells;
+      is_placed[static_cast<size_t>(i)] = 1;
     }
   });
   for (size_t i = 0; i < instances.size(); ++i)
-    if (is_moved[i])
-      instances[i] = std::move(moved[i]);
+    if (is_placed[i])
+      instances[i] = std::move(placed[i]);
 }
 
 } // namespace pickdetect::detail

@@ -18,6 +18,11 @@ namespace pickdetect::detail {
 /// tote or another object lies denies a whole part's cells; noise and glare deny a few in any
 /// place.
 constexpr int kMinShiftGainCells = 6;
+/// A place shifted by a copy whose grasp point lies this many frame pixels or more from the
+/// instance's and that explains the frame within kMinShiftGainCells as well leaves the instance
+/// Instance::place_unsure; nearer copies (a small pattern repeated within a picture) move the
+/// grasp by little.
+constexpr double kMinUnsureShiftPx = 24.0;
 /// A candidate place must keep this share of the instance's supporting keypoints on its outline.
 constexpr double kMinShiftSupportShare = 0.9;
 
@@ -30,9 +35,10 @@ constexpr double kMinShiftSupportShare = 0.9;
 /// two places differ is kept: the true place predicts print only where the object is, and the
 /// frame shows it there; a shifted one predicts a copy where the belt, the tote or another
 /// object shows, or outside the frame. Where both predict the print, a repeated design predicts
-/// the same: no evidence either way.
-/// `grey`: the frame, CV_8UC1; empty: nothing is moved; `motion_blur`: the frame's
-/// (compare_cells).
+/// the same: no evidence either way. An instance whose place, once chosen, has a rival far
+/// enough off (kMinUnsureShiftPx) that explains the frame nearly as well is
+/// Instance::place_unsure. `grey`: the frame, CV_8UC1; empty: nothing is moved; `motion_blur`: the
+/// frame's (compare_cells).
 void place_repeated_designs(std::vector<Instance>& instances, const std::vector<Model>& models,
                             const Matcher& matcher, const cv::Mat& grey,
                             const cv::Point2f& motion_blur = cv::Point2f());

@@ -107,7 +107,8 @@ struct Instance {
   /// Another detected instance lies on it (or which is on top is unclear), or, when the frame's
   /// pixels were given, something of no model does (see occlusion.hpp).
   bool covered = false;
-  bool pickable = false;    ///< Not covered, enough of it seen, not guided (occlusion.hpp).
+  /// Not covered, enough of it seen, neither guided nor place_unsure (occlusion.hpp).
+  bool pickable = false;
   int pick_order = 0;       ///< 1 = pick first among the pickable instances; 0 = not pickable.
   cv::Point2f grasp;        ///< The model's grasp point in the scene.
   double grasp_angle = 0.0; ///< Gripper angle in degrees (the instance's angle).
@@ -115,6 +116,11 @@ struct Instance {
   /// print): its support pairs keypoints by descriptor where its pose puts them, not by the
   /// ratio test. Never pickable: too little evidence to send a gripper to.
   bool guided = false;
+  /// A model whose picture repeats a part (a bundle of identical packs), placed where the frame
+  /// does not tell which of its copies lie where: its ends out of the frame or hidden, a place
+  /// shifted by a copy explains what is seen as well. Never pickable: its grasp point may be a
+  /// copy off.
+  bool place_unsure = false;
 };
 
 /// Time spent in each stage of one detection, in milliseconds.

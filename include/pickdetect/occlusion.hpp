@@ -52,7 +52,8 @@ void drop_hidden_instances(std::vector<Instance>& instances, const std::vector<M
 /// given, the frame shows something else than the model's picture over a connected patch of
 /// it: an object that is no instance lying on it),
 /// `visibility` (share of its outline inside the frame and under no instance on top of it),
-/// `pickable` (not covered, not `guided`, grasp point kGraspMarginPx inside the frame,
+/// `pickable` (not covered, not `guided` nor `place_unsure`, grasp point kGraspMarginPx inside
+/// the frame,
 /// visibility at least kMinPickableVisibility) and `pick_order` (1 = first, by score, among the
 /// pickable). `models` are indexed by Instance::model; `grey`, the frame, is optional; `kind` names
 /// the features the instances were found with.

@@ -183,4 +183,20 @@ TEST(RepeatedDesign, ABundleRunningOutOfOneEdgeAndNearTheOtherStaysWhereItIs) {
       << instances[0].center.x << ", " << instances[0].center.y << ")";
 }
 
+TEST(RepeatedDesign, ABundleLongerThanTheFrameIsNeverPickable) {
+  // Seven packs running out of the frame at both ends: every place a whole number of packs
+  // along fits what is seen, and a gripper sent to the chosen one may grasp a pack or more off
+  // its centre. Wholly in view, the same bundle is placed for sure and pickable.
+  const double scale = 0.3;
+  const SevenPacks inside(cv::Size(800, 240), {400.f, 120.f}, scale);
+  ASSERT_LT(cv::norm(inside.found.center - cv::Point2f(400.f, 120.f)), 1.5);
+  EXPECT_FALSE(inside.found.place_unsure);
+  EXPECT_TRUE(inside.found.pickable);
+  const SevenPacks across(cv::Size(480, 240), {240.f, 120.f}, scale);
+  ASSERT_GE(across.found.matches, 20) << "the packs in view are found as one bundle";
+  EXPECT_TRUE(across.found.place_unsure);
+  EXPECT_FALSE(across.found.pickable)
+      << "placed at (" << across.found.center.x << ", " << across.found.center.y << ")";
+}
+
 } // namespace
