@@ -15,14 +15,6 @@
 namespace pickdetect::detail {
 namespace {
 
-/// The frame's cells compared with an instance's print, `others` (the other instances, which may
-/// lie on it) left out (compare_cells).
-CellComparison print_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
-                           const std::vector<const Instance*>& others,
-                           const cv::Point2f& motion_blur) {
-  return compare_cells(inst, model, grey, others, {}, {}, motion_blur);
-}
-
 /// How well a place explains the frame where another place of the same design does not
 /// predict it (cells whose centres lie outside `other`, an outline): the cells that show the
 /// print, less those that show something else (denies_print). Where both places predict the
@@ -53,10 +45,6 @@ Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& sh
   return out;
 }
 
-} // namespace
-
-namespace {
-
 /// The best of an instance's places shifted by a copy, if one explains the frame better by
 /// kMinShiftGainCells, and how nearly the best of those far enough off to matter
 /// (kMinUnsureShiftPx) comes to it (gain over the instance's own place).
@@ -71,14 +59,15 @@ ShiftChoice choose_shift(const Instance& inst, const Model& model,
                          const std::vector<const Instance*>& others,
                          const cv::Point2f& motion_blur) {
   ShiftChoice out;
-  const CellComparison own = print_cells(inst, model, grey, others, motion_blur);
+  // What lies on it is no evidence against a place: `others` are left out of each comparison.
+  const CellComparison own = compare_cells(inst, model, grey, others, {}, {}, motion_blur);
   const double support = static_cast<double>(inst.support.size());
   int best_gain = kMinShiftGainCells - 1;
   for (const cv::Point2f& shift : shifts) {
     Instance candidate = shifted(inst, model, shift);
     if (count_inside(inst.support, candidate.outline) < kMinShiftSupportShare * support)
       continue;
-    const CellComparison there = print_cells(candidate, model, grey, others, motion_blur);
+    const CellComparison there = compare_cells(candidate, model, grey, others, {}, {}, motion_blur);
     // Each place judged where only it predicts the print: the true place shows it there,
     // a shifted one predicts a copy where the belt, the tote or another object shows.
     const int gain =

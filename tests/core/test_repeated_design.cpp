@@ -128,7 +128,7 @@ TEST(RepeatedDesign, ABundleFoundAPackPastItsEndIntoTheFramesEdgeIsMovedOntoItsP
   // pack, which shows the print, tells them apart.
   const double scale = 0.3;
   const cv::Size frame(800, 240);
-  const float half = static_cast<float>(7 * 324 * scale / 2);
+  const float half = static_cast<float>(test_scene::box_model().image.cols * 3.5 * scale);
   const cv::Point2f truth(frame.width - 5 - half, 120.f);
   const SevenPacks bundle(frame, truth, scale);
   ASSERT_LT(cv::norm(bundle.found.center - truth), 1.5) << "the bundle itself is found in place";
@@ -170,7 +170,7 @@ TEST(RepeatedDesign, ABundleRunningOutOfOneEdgeAndNearTheOtherStaysWhereItIs) {
   // though it would take in the print along the bundle's end that the true outline's edge
   // leaves uncompared.
   const double scale = 0.3;
-  const float pack = static_cast<float>(324 * scale);
+  const float pack = static_cast<float>(test_scene::box_model().image.cols * scale);
   const float half = 3.5f * pack;
   const cv::Point2f truth(half - pack, 120.f);
   const cv::Size frame(static_cast<int>(truth.x + half + pack / 3), 240);
