@@ -37,14 +37,6 @@ int explained_beyond(const CellComparison& cmp, const std::vector<cv::Point2f>& 
   return score;
 }
 
-Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& shift) {
-  Instance out = inst;
-  const cv::Matx33d by(1, 0, shift.x, 0, 1, shift.y, 0, 0, 1);
-  place(out, model, inst.homography * by);
-  set_grasp(out, model);
-  return out;
-}
-
 /// The best of an instance's places shifted by a copy, if one explains the frame better by
 /// kMinShiftGainCells, and how nearly the best of those far enough off to matter
 /// (kMinUnsureShiftPx) comes to it (gain over the instance's own place).
@@ -84,6 +76,14 @@ ShiftChoice choose_shift(const Instance& inst, const Model& model,
 }
 
 } // namespace
+
+Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& shift) {
+  Instance out = inst;
+  const cv::Matx33d by(1, 0, shift.x, 0, 1, shift.y, 0, 0, 1);
+  place(out, model, inst.homography * by);
+  set_grasp(out, model);
+  return out;
+}
 
 void place_repeated_designs(std::vector<Instance>& instances, const std::vector<Model>& models,
                             const Matcher& matcher, const cv::Mat& grey,

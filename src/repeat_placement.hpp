@@ -26,6 +26,10 @@ constexpr double kMinUnsureShiftPx = 24.0;
 /// A candidate place must keep this share of the instance's supporting keypoints on its outline.
 constexpr double kMinShiftSupportShare = 0.9;
 
+/// `inst` moved by `shift` (model pixels) along its model's picture: its homography, outline,
+/// centre and grasp point carried with it, all else (its support) as it was.
+Instance shifted(const Instance& inst, const Model& model, const cv::Point2f& shift);
+
 /// A match to a repeated part votes for every place it could mean; where a part of the design is
 /// hidden (out of the frame, under something) or the votes of neighbouring copies tie, the
 /// instance can come out shifted by a copy or more along the design, its outline running past

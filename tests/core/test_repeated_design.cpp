@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // A model whose picture repeats a part (a bundle of identical packs): every copy is a place a
 // scene feature could mean, and the bundle is placed where all its packs agree.
-#include "../../src/model_scene.hpp"
 #include "../../src/repeat_placement.hpp"
 #include "../support/box.hpp"
 #include "common/scene.hpp"
@@ -26,10 +25,8 @@ namespace {
 /// keeping only the support its moved outline holds: an instance of a repeated design found
 /// shifted along it, as its votes can leave it.
 Instance shifted_by_packs(const Instance& inst, const Model& model, int packs, double pack_width) {
-  Instance out = inst;
-  const cv::Matx33d by(1, 0, packs * pack_width, 0, 1, 0, 0, 0, 1);
-  detail::place(out, model, inst.homography * by);
-  detail::set_grasp(out, model);
+  Instance out =
+      detail::shifted(inst, model, cv::Point2f(static_cast<float>(packs * pack_width), 0.f));
   out.support.clear();
   for (const cv::Point2f& p : inst.support)
     if (cv::pointPolygonTest(out.outline, p, false) >= 0)
