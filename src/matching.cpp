@@ -37,6 +37,12 @@ constexpr int kMinShiftPairs = 20;
 constexpr int kSearchBlock = 32;
 /// Ambiguity::Share: neighbours searched per scene descriptor (two per model, at most this).
 constexpr int kMaxNeighbours = 16;
+/// Neighbours searched per scene descriptor on account of a texture's group (kMaxCopies), at
+/// most: the search visits at least as many leaves. A picture of hand-drawn strokes (beltA's
+/// pic3, a group of 243) keeps its count; bundles of seven packs with their tilted views (a
+/// group of 479 in `HappyFish`'s) made the search 668 ms of a 1280x720 frame's 920
+/// (docs/performance.md).
+constexpr int kMaxTextureNeighbours = 256;
 /// Ambiguity::Share: a model's nearest descriptor within 1 / kNearlyAsGood of the nearest of
 /// all fits about as well as the best.
 constexpr float kNearlyAsGood = 0.9f;
@@ -304,16 +310,20 @@ void Matcher::find_repeats(const std::vector<Model>& models) {
       copies_[i] = std::move(taken);
   }
   // A texture's rows are each their own: matched by the plain ratio test, its copies their
-  // rivals, one match each. The neighbours searched (largest_group_) still count its group:
-  // searching fewer changed the other models' matches too (a bin of four other pictures lost
-  // 2 % of its recall and gained four false instances).
+  // rivals, one match each. The neighbours searched still count its group, up to
+  // kMaxTextureNeighbours (match): searching fewer changed the other models' matches too (a
+  // bin of four other pictures lost 2 % of its recall and gained four false instances).
   largest_group_ = 1;
+  largest_texture_ = 0;
   for (int i = 0; i < n; ++i) {
     const int root = group_[i];
-    largest_group_ = std::max(largest_group_, static_cast<int>(members[root].size()));
+    const int size = static_cast<int>(members[root].size());
     if (texture[root]) {
+      largest_texture_ = std::max(largest_texture_, size);
       copies_[i].clear();
       group_[i] = i;
+    } else {
+      largest_group_ = std::max(largest_group_, size);
     }
   }
   shifts_.assign(models.size(), {});
@@ -402,10 +412,16 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
   const int n_models = static_cast<int>(offset_.size());
   // Copies of a repeated part are no rivals of each other: the ratio test's second neighbour is
   // searched beyond them.
+  // A texture's group is counted too, up to kMaxTextureNeighbours: what its copies cost the
+  // kd-tree's search grows with them, not what they are worth (see kMaxTextureNeighbours).
+  auto neighbours = [&](int group) {
+    return ambiguity == Ambiguity::Share ? std::clamp(2 * n_models, 2, kMaxNeighbours) + group - 1
+                                         : 1 + group;
+  };
   const int k = std::min(descriptors_.rows,
-                         ambiguity == Ambiguity::Share
-                             ? std::clamp(2 * n_models, 2, kMaxNeighbours) + largest_group_ - 1
-                             : 1 + largest_group_);
+                         std::max(neighbours(largest_group_),
+                                  std::min(neighbours(std::max(largest_group_, largest_texture_)),
+                                           kMaxTextureNeighbours)));
   cv::Mat indices, distances;
   nearest(scene_descriptors, k, search, indices, distances, kKdChecks);
   std::vector<int> first(n_models);

@@ -97,7 +97,8 @@ private:
   std::vector<int> group_;               ///< Row -> its repeat group (itself when unrepeated).
   std::vector<std::vector<int>> copies_; ///< Row -> the rows of its group (empty: none).
   std::vector<std::vector<cv::Point2f>> shifts_; ///< Model index -> repeat_shifts.
-  int largest_group_ = 1;
+  int largest_group_ = 1;                        ///< Rows of the largest repeated design's group.
+  int largest_texture_ = 0; ///< Rows of the largest texture's group (kMaxCopies).
   /// Row -> whether its keypoint lies on a design another product shares (find_shared_designs):
   /// its matches are `shared`, whichever of the products the scene feature lies nearest.
   std::vector<char> shared_design_;

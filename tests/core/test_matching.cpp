@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <vector>
 
@@ -78,6 +79,20 @@ TEST(Matcher, SharingGivesAFeatureToEveryLookAlike) {
   }
 }
 
+namespace {
+
+/// How many of the `exact` matches `fast` holds too (the same model, scene and model keypoints).
+size_t kept(const std::vector<Match>& exact, const std::vector<Match>& fast) {
+  size_t shared = 0;
+  for (const Match& e : exact)
+    shared += std::any_of(fast.begin(), fast.end(), [&](const Match& k) {
+      return k.model == e.model && k.scene_point == e.scene_point && k.model_point == e.model_point;
+    });
+  return shared;
+}
+
+} // namespace
+
 TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
   const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
   const cv::Mat box =
@@ -89,11 +104,7 @@ TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
   const std::vector<Match> exact = matcher.match(f.descriptors, 0.8, Search::BruteForce);
   const std::vector<Match> fast = matcher.match(f.descriptors, 0.8, Search::KdTree);
   ASSERT_GT(exact.size(), 100u);
-  size_t shared = 0;
-  for (const Match& e : exact)
-    shared += std::any_of(fast.begin(), fast.end(), [&](const Match& k) {
-      return k.scene_point == e.scene_point && k.model_point == e.model_point;
-    });
+  const size_t shared = kept(exact, fast);
   EXPECT_GE(shared, exact.size() * 9 / 10)
       << shared << " of " << exact.size() << " exact matches kept";
   EXPECT_EQ(fast.size(), matcher.match(f.descriptors, 0.8, Search::KdTree).size());
@@ -156,6 +167,29 @@ TEST(Matcher, APartPrintedManyTimesOverIsATextureNotARepeatedDesign) {
                                    [](const auto& fc) { return fc.second == 3; });
   EXPECT_GE(static_cast<double>(three), 0.9 * static_cast<double>(seen.keypoints.size()))
       << "a feature of one pack of three votes for each of the three";
+}
+
+// Each search asks for as many neighbours as a texture has copies, up to a bound (a motif
+// printed 400 times over has groups of 400 rows, more than the bound): the other model's
+// matches are still what an exhaustive search finds.
+TEST(Matcher, ATextureOfHundredsOfCopiesLeavesAnotherModelsMatchesAsAnExhaustiveSearchFinds) {
+  const cv::Mat motif = test_scene::box_picture()(cv::Rect(100, 60, 32, 32)).clone();
+  cv::Mat tiles;
+  cv::repeat(motif, 20, 20, tiles);
+  const Model texture = test_scene::picture_model("texture", tiles, 0.0);
+  cv::Mat scene = test_scene::plain_background({800, 600});
+  test_scene::paste(scene, test_scene::box_picture(),
+                    {{{250.f, 250.f}, 30.0, 1.0}, {{560.f, 360.f}, 200.0, 0.9}});
+  const Features f = extract_features(scene);
+  const Matcher matcher({test_scene::box_model(), texture});
+  const std::vector<Match> exact = matcher.match(f.descriptors, 0.8, Search::BruteForce);
+  const std::vector<Match> fast = matcher.match(f.descriptors, 0.8, Search::KdTree);
+  std::vector<Match> of_box;
+  std::copy_if(exact.begin(), exact.end(), std::back_inserter(of_box),
+               [](const Match& m) { return m.model == 0; });
+  const size_t found = of_box.size(), shared = kept(of_box, fast);
+  ASSERT_GT(found, 100u);
+  EXPECT_GE(shared, found * 9 / 10) << shared << " of " << found << " exact matches kept";
 }
 
 namespace {
