@@ -411,9 +411,8 @@ std::vector<Match> Matcher::match(const cv::Mat& scene_descriptors, double ratio
   // none of the look-alikes'); the plain test needs two.
   const int n_models = static_cast<int>(offset_.size());
   // Copies of a repeated part are no rivals of each other: the ratio test's second neighbour is
-  // searched beyond them.
-  // A texture's group is counted too, up to kMaxTextureNeighbours: what its copies cost the
-  // kd-tree's search grows with them, not what they are worth (see kMaxTextureNeighbours).
+  // searched beyond them. A texture's group is counted too, up to kMaxTextureNeighbours: what
+  // its rows cost the kd-tree's search grows with them, not what they are worth.
   auto neighbours = [&](int group) {
     return ambiguity == Ambiguity::Share ? std::clamp(2 * n_models, 2, kMaxNeighbours) + group - 1
                                          : 1 + group;

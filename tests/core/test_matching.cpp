@@ -169,8 +169,8 @@ TEST(Matcher, APartPrintedManyTimesOverIsATextureNotARepeatedDesign) {
       << "a feature of one pack of three votes for each of the three";
 }
 
-// Each search asks for as many neighbours as a texture has copies, up to a bound (a motif
-// printed 400 times over has groups of 400 rows, more than the bound): the other model's
+// Each search asks for as many neighbours as a texture's group has rows, up to a bound (a motif
+// printed 400 times over makes a group of 380, more than the bound): the other model's
 // matches are still what an exhaustive search finds.
 TEST(Matcher, ATextureOfHundredsOfCopiesLeavesAnotherModelsMatchesAsAnExhaustiveSearchFinds) {
   const cv::Mat motif = test_scene::box_picture()(cv::Rect(100, 60, 32, 32)).clone();
