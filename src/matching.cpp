@@ -3,6 +3,8 @@
 // rejecting or sharing the features that fit several models (look-alikes) about equally well.
 #include <pickdetect/matching.hpp>
 
+#include "byte_descriptors.hpp"
+
 #include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/flann.hpp>
@@ -158,9 +160,12 @@ std::vector<cv::Point2f> shifts_of(const std::vector<cv::Point2f>& pairs, int ro
 
 } // namespace
 
+/// One kd-tree over the models' descriptors: over bytes when they are SIFT's whole numbers
+/// (byte_descriptors.hpp: the same neighbours, found sooner), over the floats otherwise.
 struct Matcher::KdTree {
   cv::Mat data; ///< The descriptors the tree indexes (FLANN keeps only a pointer to them).
-  std::unique_ptr<cvflann::KDTreeIndex<cvflann::L2<float>>> tree;
+  std::unique_ptr<cvflann::KDTreeIndex<detail::ByteL2>> bytes;
+  std::unique_ptr<cvflann::KDTreeIndex<cvflann::L2<float>>> floats;
 };
 
 Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kind) {
@@ -188,11 +193,20 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
     std::lock_guard<std::mutex> hold(flann_build_lock());
     cvflann::seed_random(kKdSeed);
     auto index = std::make_shared<KdTree>();
-    index->data = descriptors_;
-    const cvflann::Matrix<float> rows(index->data.ptr<float>(), index->data.rows, index->data.cols);
-    index->tree = std::make_unique<cvflann::KDTreeIndex<cvflann::L2<float>>>(
-        rows, cvflann::KDTreeIndexParams(kKdTrees));
-    index->tree->buildIndex();
+    const cvflann::KDTreeIndexParams params(kKdTrees);
+    if (detail::whole_bytes(descriptors_)) {
+      descriptors_.convertTo(index->data, CV_8U);
+      const cvflann::Matrix<uchar> rows(index->data.ptr<uchar>(), index->data.rows,
+                                        index->data.cols);
+      index->bytes = std::make_unique<cvflann::KDTreeIndex<detail::ByteL2>>(rows, params);
+      index->bytes->buildIndex();
+    } else {
+      index->data = descriptors_;
+      const cvflann::Matrix<float> rows(index->data.ptr<float>(), index->data.rows,
+                                        index->data.cols);
+      index->floats = std::make_unique<cvflann::KDTreeIndex<cvflann::L2<float>>>(rows, params);
+      index->floats->buildIndex();
+    }
     index_ = std::move(index);
   }
   find_repeats(models);
@@ -377,12 +391,22 @@ void Matcher::nearest(const cv::Mat& queries, int k, Search search, cv::Mat& ind
   const int n = queries.rows;
   indices.create(n, k, CV_32S);
   distances.create(n, k, CV_32F);
-  if (kind_ == FeatureKind::Sift && search == Search::KdTree && index_) {
+  // A tree over bytes takes queries that bytes hold exactly; others (a caller's own
+  // descriptors against SIFT's) are searched exhaustively below.
+  cv::Mat query_bytes;
+  const bool by_tree = kind_ == FeatureKind::Sift && search == Search::KdTree && index_ &&
+                       (index_->floats || detail::whole_bytes(queries));
+  if (by_tree) {
+    if (index_->bytes)
+      queries.convertTo(query_bytes, CV_8U);
     const cvflann::SearchParams params(checks);
     cv::parallel_for_(cv::Range(0, (n + kSearchBlock - 1) / kSearchBlock), [&](const cv::Range& r) {
       for (int i = r.start * kSearchBlock; i < std::min(n, r.end * kSearchBlock); ++i) {
         NearestRows found(k, indices.ptr<int>(i), distances.ptr<float>(i));
-        index_->tree->findNeighbors(found, queries.ptr<float>(i), params);
+        if (index_->bytes)
+          index_->bytes->findNeighbors(found, query_bytes.ptr<uchar>(i), params);
+        else
+          index_->floats->findNeighbors(found, queries.ptr<float>(i), params);
       }
     });
     cv::sqrt(distances, distances); // FLANN gives squared L2

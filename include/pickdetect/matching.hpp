@@ -48,6 +48,9 @@ public:
   Matcher() = default;
   /// Matches against the models' features of the given kind. SIFT descriptors are searched
   /// with a kd-tree or by brute force; ORB's binary ones by brute force (Hamming distance).
+  /// The kd-tree holds SIFT's descriptors as bytes (OpenCV's SIFT gives whole numbers from 0 to
+  /// 255); scene descriptors that are not such whole numbers, against models whose are, are
+  /// searched by brute force instead.
   explicit Matcher(const std::vector<Model>& models, FeatureKind kind = FeatureKind::Sift);
 
   /// Matches with the 2NN ratio test: nearest / second nearest distance below `ratio`.
@@ -92,7 +95,7 @@ private:
   /// Model index -> its product (the first model of its name): a feature that fits only views
   /// of one product is no look-alike's, and its matches are not `shared`.
   std::vector<int> product_;
-  struct KdTree; ///< FLANN's kd-tree over descriptors_ (SIFT only).
+  struct KdTree; ///< FLANN's kd-tree over descriptors_ (SIFT only), as bytes when they are.
   std::shared_ptr<const KdTree> index_;
   std::vector<int> group_;               ///< Row -> its repeat group (itself when unrepeated).
   std::vector<std::vector<int>> copies_; ///< Row -> the rows of its group (empty: none).

@@ -110,6 +110,60 @@ TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
   EXPECT_EQ(fast.size(), matcher.match(f.descriptors, 0.8, Search::KdTree).size());
 }
 
+namespace {
+
+/// Whether every match's distance is the L2 distance between its scene descriptor and its model
+/// descriptor, or (a part repeated in the model, one match for each of its copies) one of its
+/// copies', to a float's rounding.
+void expect_own_distances(const std::vector<Match>& matches, const cv::Mat& scene,
+                          const cv::Mat& model) {
+  std::map<int, std::vector<const Match*>> by_feature;
+  for (const Match& m : matches)
+    by_feature[m.scene_point].push_back(&m);
+  for (const auto& [feature, its] : by_feature) {
+    bool found = false;
+    for (const Match* m : its)
+      found = found || std::abs(m->distance -
+                                cv::norm(scene.row(feature), model.row(m->model_point))) < 1e-3;
+    ASSERT_TRUE(found) << "scene feature " << feature << ": " << its.front()->distance;
+  }
+}
+
+} // namespace
+
+TEST(Matcher, KdTreeSearchOverSiftsWholeNumbersGivesTheDescriptorsOwnDistances) {
+  // The kd-tree holds SIFT's descriptors as bytes: what it reports is still the distance
+  // between the descriptors themselves.
+  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  const cv::Mat box =
+      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/box.png", cv::IMREAD_GRAYSCALE);
+  cv::Mat scene = test_scene::plain_background({800, 600});
+  test_scene::paste(scene, box, {{{300.f, 280.f}, 40.0, 0.9}});
+  const Features f = extract_features(scene);
+  const std::vector<Match> fast = Matcher({model}).match(f.descriptors, 0.8, Search::KdTree);
+  ASSERT_GT(fast.size(), 50u);
+  expect_own_distances(fast, f.descriptors, model.sift.descriptors);
+}
+
+TEST(Matcher, DescriptorsThatAreNotWholeNumbersAreMatchedAtTheirOwnDistances) {
+  // A caller's own descriptors need not be SIFT's whole numbers from 0 to 255: bytes would
+  // round them, so they are searched as they are.
+  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  cv::Mat fractional;
+  model.sift.descriptors.convertTo(fractional, CV_32F, 0.7, 0.3);
+  // Against the models' whole numbers (searched exhaustively)...
+  const std::vector<Match> against_whole = Matcher({model}).match(fractional, 0.8, Search::KdTree);
+  ASSERT_GT(against_whole.size(), model.sift.keypoints.size() / 4);
+  expect_own_distances(against_whole, fractional, model.sift.descriptors);
+  // ...and models of such descriptors against SIFT's own (a kd-tree over the floats).
+  Model scaled = model;
+  scaled.sift.descriptors = fractional;
+  const std::vector<Match> against_fractional =
+      Matcher({scaled}).match(model.sift.descriptors, 0.8, Search::KdTree);
+  ASSERT_GT(against_fractional.size(), model.sift.keypoints.size() / 4);
+  expect_own_distances(against_fractional, model.sift.descriptors, fractional);
+}
+
 TEST(Matcher, ARepeatedDesignHasTheShiftsBetweenItsCopies) {
   const Model& box = test_scene::box_model();
   const Model bundle = test_scene::bundle_model(3);
