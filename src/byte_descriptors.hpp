@@ -33,10 +33,51 @@ inline bool whole_bytes(const cv::Mat& m) {
   return true;
 }
 
-/// FLANN's squared L2 distance (cvflann::L2) over byte rows, summed 16 bytes at a time with
-/// OpenCV's universal intrinsics: the same whole number as cvflann::L2<unsigned char>'s float
-/// sum, a fraction of the instructions. `accum_dist` is FLANN's own (a cut of the kd-tree
-/// against one value).
+/// Squared L2 distance between two byte rows of `size` values, summed 16 bytes at a time with
+/// OpenCV's universal intrinsics (a whole number, exact). With kMayStop, once the sum of the
+/// first 16 values, then of the first 32 or 64, passes `stop`, that part sum is returned instead
+/// (the whole is larger still): most pairs of descriptors lie far apart, and an exhaustive search
+/// within a radius need not sum them to the end.
+template <bool kMayStop> int summed_squares(const uchar* a, const uchar* b, size_t size, int stop) {
+  size_t i = 0;
+  int total = 0;
+#if CV_SIMD128
+  cv::v_int32x4 sum = cv::v_setzero_s32();
+  for (; i + 16 <= size; i += 16) {
+    const cv::v_uint8x16 d = cv::v_absdiff(cv::v_load(a + i), cv::v_load(b + i));
+    cv::v_uint16x8 low, high;
+    cv::v_expand(d, low, high);
+    const cv::v_int16x8 l = cv::v_reinterpret_as_s16(low);
+    const cv::v_int16x8 h = cv::v_reinterpret_as_s16(high);
+    sum += cv::v_dotprod(l, l) + cv::v_dotprod(h, h);
+    if (kMayStop && (i == 0 || i == 16 || i == 48) && i + 16 < size) {
+      const int part = cv::v_reduce_sum(sum);
+      if (part > stop)
+        return part;
+    }
+  }
+  total = cv::v_reduce_sum(sum);
+#endif
+  for (; i < size; ++i) {
+    const int d = static_cast<int>(a[i]) - static_cast<int>(b[i]);
+    total += d * d;
+  }
+  return total;
+}
+
+/// The squared distance, whole.
+inline int squared_distance(const uchar* a, const uchar* b, size_t size) {
+  return summed_squares<false>(a, b, size, 0);
+}
+
+/// The squared distance when it is at most `stop`; otherwise some number above `stop`.
+inline int squared_distance_until(const uchar* a, const uchar* b, size_t size, int stop) {
+  return summed_squares<true>(a, b, size, stop);
+}
+
+/// FLANN's squared L2 distance (cvflann::L2) over byte rows: the same whole number as
+/// cvflann::L2<unsigned char>'s float sum, a fraction of the instructions. `accum_dist` is
+/// FLANN's own (a cut of the kd-tree against one value).
 struct ByteL2 {
   typedef cvflann::True is_kdtree_distance;
   typedef cvflann::True is_vector_space_distance;
@@ -46,25 +87,7 @@ struct ByteL2 {
 
   template <typename Row1, typename Row2>
   float operator()(Row1 a, Row2 b, size_t size, float /*worst_dist*/ = -1) const {
-    size_t i = 0;
-    int total = 0;
-#if CV_SIMD128
-    cv::v_int32x4 sum = cv::v_setzero_s32();
-    for (; i + 16 <= size; i += 16) {
-      const cv::v_uint8x16 d = cv::v_absdiff(cv::v_load(&a[i]), cv::v_load(&b[i]));
-      cv::v_uint16x8 low, high;
-      cv::v_expand(d, low, high);
-      const cv::v_int16x8 l = cv::v_reinterpret_as_s16(low);
-      const cv::v_int16x8 h = cv::v_reinterpret_as_s16(high);
-      sum += cv::v_dotprod(l, l) + cv::v_dotprod(h, h);
-    }
-    total = cv::v_reduce_sum(sum);
-#endif
-    for (; i < size; ++i) {
-      const int d = static_cast<int>(a[i]) - static_cast<int>(b[i]);
-      total += d * d;
-    }
-    return static_cast<float>(total);
+    return static_cast<float>(squared_distance(&a[0], &b[0], size));
   }
 
   template <typename U, typename V> float accum_dist(const U& a, const V& b, int) const {
