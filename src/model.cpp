@@ -8,6 +8,7 @@
 #include "open_file_storage.hpp"
 
 #include <opencv2/core/persistence.hpp>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -276,8 +277,16 @@ static void add_tilted_views(const Model& model, const cv::Mat& picture, Feature
                              double contrast_threshold) {
   if (!(model.max_tilt_deg > 0.0))
     return;
-  for (const TiltedView& view : tilted_views(model.max_tilt_deg)) {
-    const Features v = features_of_view(picture, model.mask, view, contrast_threshold);
+  // The views on both cores at once, each SIFT run on one: SIFT's own threads leave a core
+  // idle while it blurs its pyramid. Gathered in the views' order.
+  const std::vector<TiltedView> views = tilted_views(model.max_tilt_deg);
+  std::vector<Features> found(views.size());
+  cv::parallel_for_(cv::Range(0, static_cast<int>(views.size())), [&](const cv::Range& r) {
+    for (int i = r.start; i < r.end; ++i)
+      found[static_cast<size_t>(i)] =
+          features_of_view(picture, model.mask, views[static_cast<size_t>(i)], contrast_threshold);
+  });
+  for (const Features& v : found) {
     f.keypoints.insert(f.keypoints.end(), v.keypoints.begin(), v.keypoints.end());
     if (!v.descriptors.empty())
       f.descriptors.push_back(v.descriptors);
