@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Matching: the 2NN ratio test over all models at once, look-alike features rejected or shared,
-// kd-tree against brute force.
+// kd-tree against brute force, SIFT descriptors held as bytes.
+#include "../../src/byte_descriptors.hpp"
 #include "../support/box.hpp"
 #include "../support/folder_test.hpp"
 #include "common/scene.hpp"
@@ -16,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <vector>
 
@@ -162,6 +164,48 @@ TEST(Matcher, DescriptorsThatAreNotWholeNumbersAreMatchedAtTheirOwnDistances) {
       Matcher({scaled}).match(model.sift.descriptors, 0.8, Search::KdTree);
   ASSERT_GT(against_fractional.size(), model.sift.keypoints.size() / 4);
   expect_own_distances(against_fractional, model.sift.descriptors, fractional);
+}
+
+TEST(ByteDescriptors, TheSquaredDistanceIsWholeAndStopsOnlyPastItsBound) {
+  cv::RNG rng(20261207);
+  for (int size : {128, 37}) { // SIFT's length, and one the 16-byte steps do not divide
+    for (int pair = 0; pair < 200; ++pair) {
+      cv::Mat a(1, size, CV_8U), b(1, size, CV_8U);
+      rng.fill(a, cv::RNG::UNIFORM, 0, 256);
+      b = a.clone();
+      // Most pairs far apart, some near: a few values moved.
+      if (pair % 2 == 0)
+        rng.fill(b, cv::RNG::UNIFORM, 0, 256);
+      else
+        for (int k = 0; k < 4; ++k)
+          b.at<uchar>(0, rng.uniform(0, size)) = static_cast<uchar>(rng.uniform(0, 256));
+      const int exact = static_cast<int>(cv::norm(a, b, cv::NORM_L2SQR));
+      const uchar* x = a.ptr<uchar>();
+      const uchar* y = b.ptr<uchar>();
+      ASSERT_EQ(detail::squared_distance(x, y, size), exact);
+      for (int stop : {0, exact / 3, exact - 1, exact, exact + 1, 10000}) {
+        const int until = detail::squared_distance_until(x, y, size, stop);
+        if (exact <= stop)
+          ASSERT_EQ(until, exact) << "stop " << stop;
+        else
+          ASSERT_GT(until, stop) << "distance " << exact;
+      }
+    }
+  }
+}
+
+TEST(ByteDescriptors, OnlyWholeNumbersFromZeroTo255AreBytes) {
+  cv::Mat rows(2, 128, CV_32F, cv::Scalar(255.f));
+  rows.at<float>(1, 5) = 0.f;
+  EXPECT_TRUE(detail::whole_bytes(rows));
+  for (float odd : {0.5f, -1.f, 256.f, std::numeric_limits<float>::quiet_NaN()}) {
+    cv::Mat changed = rows.clone();
+    changed.at<float>(1, 7) = odd;
+    EXPECT_FALSE(detail::whole_bytes(changed)) << odd;
+  }
+  cv::Mat bytes;
+  rows.convertTo(bytes, CV_8U);
+  EXPECT_FALSE(detail::whole_bytes(bytes)); // held as floats only
 }
 
 TEST(Matcher, ARepeatedDesignHasTheShiftsBetweenItsCopies) {
