@@ -277,8 +277,9 @@ static void add_tilted_views(const Model& model, const cv::Mat& picture, Feature
                              double contrast_threshold) {
   if (!(model.max_tilt_deg > 0.0))
     return;
-  // The views on both cores at once, each SIFT run on one: SIFT's own threads leave a core
-  // idle while it blurs its pyramid. Gathered in the views' order.
+  // The views on all cores at once, each SIFT run on one (nested in parallel_for_, its own
+  // threads stay out): on two cores SIFT's threads gain little on one picture (a pallet's
+  // bundles loaded in half the time, docs/performance.md). Gathered in the views' order.
   const std::vector<TiltedView> views = tilted_views(model.max_tilt_deg);
   std::vector<Features> found(views.size());
   cv::parallel_for_(cv::Range(0, static_cast<int>(views.size())), [&](const cv::Range& r) {
