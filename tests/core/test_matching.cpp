@@ -96,9 +96,8 @@ size_t kept(const std::vector<Match>& exact, const std::vector<Match>& fast) {
 } // namespace
 
 TEST(Matcher, KdTreeSearchKeepsWhatBruteForceFinds) {
-  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
-  const cv::Mat box =
-      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/box.png", cv::IMREAD_GRAYSCALE);
+  const Model& model = test_scene::box_model();
+  const cv::Mat box = test_scene::box_picture();
   cv::Mat scene = test_scene::plain_background({800, 600});
   test_scene::paste(scene, box, {{{250.f, 250.f}, 30.0, 1.0}, {{560.f, 360.f}, 200.0, 0.9}});
   const Features f = extract_features(scene);
@@ -136,11 +135,9 @@ void expect_own_distances(const std::vector<Match>& matches, const cv::Mat& scen
 TEST(Matcher, KdTreeSearchOverSiftsWholeNumbersGivesTheDescriptorsOwnDistances) {
   // The kd-tree holds SIFT's descriptors as bytes: what it reports is still the distance
   // between the descriptors themselves.
-  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
-  const cv::Mat box =
-      cv::imread(std::string(PICKDETECT_TEST_DATA) + "/box.png", cv::IMREAD_GRAYSCALE);
+  const Model& model = test_scene::box_model();
   cv::Mat scene = test_scene::plain_background({800, 600});
-  test_scene::paste(scene, box, {{{300.f, 280.f}, 40.0, 0.9}});
+  test_scene::paste(scene, test_scene::box_picture(), {{{300.f, 280.f}, 40.0, 0.9}});
   const Features f = extract_features(scene);
   const std::vector<Match> fast = Matcher({model}).match(f.descriptors, 0.8, Search::KdTree);
   ASSERT_GT(fast.size(), 50u);
@@ -150,7 +147,7 @@ TEST(Matcher, KdTreeSearchOverSiftsWholeNumbersGivesTheDescriptorsOwnDistances) 
 TEST(Matcher, DescriptorsThatAreNotWholeNumbersAreMatchedAtTheirOwnDistances) {
   // A caller's own descriptors need not be SIFT's whole numbers from 0 to 255: bytes would
   // round them, so they are searched as they are.
-  const Model model = load_model(std::string(PICKDETECT_TEST_DATA) + "/box.png");
+  const Model& model = test_scene::box_model();
   cv::Mat fractional;
   model.sift.descriptors.convertTo(fractional, CV_32F, 0.7, 0.3);
   // Against the models' whole numbers (searched exhaustively)...
