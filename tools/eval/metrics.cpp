@@ -309,7 +309,10 @@ PairedCenters paired_centers(const std::map<std::string, Scorer>& scorers) {
   if (scorers.empty())
     return out;
   std::map<std::string, double> sums;
-  for (const auto& [key, error] : scorers.begin()->second.center_errors()) {
+  for (const auto& entry : scorers.begin()->second.center_errors()) {
+    // A named key, not a structured binding: C++17 does not let a lambda capture those (clang
+    // refuses; the fuzzing build, scripts/fuzz.sh, uses it).
+    const auto& key = entry.first;
     const bool everywhere = std::all_of(scorers.begin(), scorers.end(), [&](const auto& kv) {
       return kv.second.center_errors().count(key) > 0;
     });
