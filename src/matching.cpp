@@ -4,6 +4,7 @@
 #include <pickdetect/matching.hpp>
 
 #include "byte_descriptors.hpp"
+#include "kd_tree_search.hpp"
 
 #include <opencv2/core/utility.hpp>
 #include <opencv2/features2d.hpp>
@@ -15,6 +16,7 @@
 #include <limits>
 #include <map>
 #include <mutex>
+#include <optional>
 
 namespace pickdetect {
 namespace {
@@ -75,7 +77,7 @@ constexpr int kTwinChecks = 128;
 /// candidate (a seventh of the matching stage at 17 neighbours and 32 leaves,
 /// docs/performance.md). FLANN's array-based KNNResultSet would not allocate either, but it
 /// orders equal distances by arrival, so a tie could pick another nearest row than before.
-class NearestRows : public cvflann::ResultSet<float> {
+class NearestRows final : public cvflann::ResultSet<float> {
 public:
   NearestRows(int k, int* rows, float* distances) : k_(k), rows_(rows), distances_(distances) {}
   bool full() const override { return count_ == k_; }
@@ -225,6 +227,8 @@ std::vector<cv::Point2f> shifts_of(const std::vector<cv::Point2f>& pairs, int ro
 struct Matcher::KdTree {
   cv::Mat data; ///< The descriptors the tree indexes (FLANN keeps only a pointer to them).
   std::unique_ptr<cvflann::KDTreeIndex<detail::ByteL2>> bytes;
+  /// The tree of `bytes`, searched as FLANN does without its costs per search.
+  std::optional<detail::ByteKdTree> byte_tree;
   std::unique_ptr<cvflann::KDTreeIndex<cvflann::L2<float>>> floats;
 };
 
@@ -260,6 +264,7 @@ Matcher::Matcher(const std::vector<Model>& models, FeatureKind kind) : kind_(kin
                                         index->data.cols);
       index->bytes = std::make_unique<cvflann::KDTreeIndex<detail::ByteL2>>(rows, params);
       index->bytes->buildIndex();
+      index->byte_tree = detail::ByteKdTree::read(*index->bytes, index->data);
     } else {
       index->data = descriptors_;
       const cvflann::Matrix<float> rows(index->data.ptr<float>(), index->data.rows,
@@ -448,9 +453,12 @@ void Matcher::nearest(const cv::Mat& queries, int k, Search search, cv::Mat& ind
       queries.convertTo(query_bytes, CV_8U);
     const cvflann::SearchParams params(checks);
     cv::parallel_for_(cv::Range(0, (n + kSearchBlock - 1) / kSearchBlock), [&](const cv::Range& r) {
+      std::vector<detail::ByteKdTree::Branch> heap;
       for (int i = r.start * kSearchBlock; i < std::min(n, r.end * kSearchBlock); ++i) {
         NearestRows found(k, indices.ptr<int>(i), distances.ptr<float>(i));
-        if (index_->bytes)
+        if (index_->byte_tree)
+          index_->byte_tree->search(query_bytes.ptr<uchar>(i), found, checks, heap);
+        else if (index_->bytes)
           index_->bytes->findNeighbors(found, query_bytes.ptr<uchar>(i), params);
         else
           index_->floats->findNeighbors(found, queries.ptr<float>(i), params);
