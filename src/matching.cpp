@@ -17,6 +17,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <utility>
 
 namespace pickdetect {
 namespace {
@@ -77,17 +78,30 @@ constexpr int kTwinChecks = 128;
 /// candidate (a seventh of the matching stage at 17 neighbours and 32 leaves,
 /// docs/performance.md). FLANN's array-based KNNResultSet would not allocate either, but it
 /// orders equal distances by arrival, so a tie could pick another nearest row than before.
+/// Until the row is full the search drops nothing (worstDist is the largest float): the first k
+/// rows offered are gathered as they come and put in that order once, when the k-th comes (a
+/// texture's search asks for up to 256 neighbours, which inserted one by one in order cost a
+/// shift of half the row each). `order` is room for that, kept by the caller between searches.
+/// finish() puts the row in order when fewer than k rows were offered.
 class NearestRows final : public cvflann::ResultSet<float> {
 public:
-  NearestRows(int k, int* rows, float* distances) : k_(k), rows_(rows), distances_(distances) {}
+  NearestRows(int k, int* rows, float* distances, std::vector<std::pair<float, int>>& order)
+      : k_(k), rows_(rows), distances_(distances), order_(order) {}
   bool full() const override { return count_ == k_; }
   float worstDist() const override {
     return count_ == k_ ? distances_[k_ - 1] : std::numeric_limits<float>::max();
   }
   void addPoint(float distance, int row) override {
-    if (distance >= worstDist())
+    if (count_ < k_) {
+      distances_[count_] = distance;
+      rows_[count_] = row;
+      if (++count_ == k_)
+        put_in_order();
       return;
-    int j = count_ < k_ ? count_++ : k_ - 1;
+    }
+    if (distance >= distances_[k_ - 1])
+      return;
+    int j = k_ - 1;
     for (; j > 0 &&
            (distances_[j - 1] > distance || (distances_[j - 1] == distance && rows_[j - 1] > row));
          --j) {
@@ -97,11 +111,37 @@ public:
     distances_[j] = distance;
     rows_[j] = row;
   }
+  void finish() {
+    if (count_ < k_)
+      put_in_order();
+  }
 
 private:
+  /// By distance, then by row (rows are unique: a strict order, the one insertion keeps). A
+  /// distance that is not a number (a caller's own descriptors may hold one) goes last: the
+  /// order stays strict, as std::sort needs.
+  void put_in_order() {
+    order_.resize(static_cast<size_t>(count_));
+    for (int i = 0; i < count_; ++i)
+      order_[static_cast<size_t>(i)] = {distances_[i], rows_[i]};
+    std::sort(order_.begin(), order_.end(), [](const auto& a, const auto& b) {
+      const bool a_nan = std::isnan(a.first), b_nan = std::isnan(b.first);
+      if (a_nan != b_nan)
+        return b_nan;
+      if (!a_nan && a.first != b.first)
+        return a.first < b.first;
+      return a.second < b.second;
+    });
+    for (int i = 0; i < count_; ++i) {
+      distances_[i] = order_[static_cast<size_t>(i)].first;
+      rows_[i] = order_[static_cast<size_t>(i)].second;
+    }
+  }
+
   int k_;
   int* rows_;
   float* distances_;
+  std::vector<std::pair<float, int>>& order_;
   int count_ = 0;
 };
 
@@ -454,14 +494,16 @@ void Matcher::nearest(const cv::Mat& queries, int k, Search search, cv::Mat& ind
     const cvflann::SearchParams params(checks);
     cv::parallel_for_(cv::Range(0, (n + kSearchBlock - 1) / kSearchBlock), [&](const cv::Range& r) {
       std::vector<detail::ByteKdTree::Branch> heap;
+      std::vector<std::pair<float, int>> order;
       for (int i = r.start * kSearchBlock; i < std::min(n, r.end * kSearchBlock); ++i) {
-        NearestRows found(k, indices.ptr<int>(i), distances.ptr<float>(i));
+        NearestRows found(k, indices.ptr<int>(i), distances.ptr<float>(i), order);
         if (index_->byte_tree)
           index_->byte_tree->search(query_bytes.ptr<uchar>(i), found, checks, heap);
         else if (index_->bytes)
           index_->bytes->findNeighbors(found, query_bytes.ptr<uchar>(i), params);
         else
           index_->floats->findNeighbors(found, queries.ptr<float>(i), params);
+        found.finish();
       }
     });
     cv::sqrt(distances, distances); // FLANN gives squared L2
