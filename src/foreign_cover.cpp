@@ -314,7 +314,7 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
     return 0;
   const std::vector<CellLook>& looks = cmp.looks;
   const bool seen_enough = cmp.print_cells >= kMinForeignCells;
-  const double detail_kept = cmp.detail_kept, light = cmp.light;
+  const double detail_kept = cmp.detail_kept;
 
   cv::Mat foreign = cv::Mat::zeros(rows, columns, CV_8UC1);
   for (int r = 0; r < rows; ++r)
@@ -336,15 +336,18 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
         foreign.at<uchar>(r, c) = 255;
     }
 
-  // The cells that do not show the print: something else, or flat where no highlight washes the
-  // print out. A cover seen through motion blur or in dim light is partly flat, partly smeared
-  // texture: its flat cells join the cells that show something else into one group.
+  // The cells that do not show the print: something else, or flat. A cover seen through motion
+  // blur or in dim light is partly flat, partly smeared texture: its flat cells join the cells
+  // that show something else into one group. So do flat cells lighter than the print, which
+  // count for nothing themselves (a highlight washing the print out, or a light plain surface):
+  // a light lid has a sharp rim that shows something else around its flat inside, where a
+  // highlight fades into the print around it.
   cv::Mat unseen = foreign.clone();
   if (seen_enough)
     for (int r = 0; r < rows; ++r)
       for (int c = 0; c < columns; ++c) {
         const CellLook& l = looks[static_cast<size_t>(r) * columns + c];
-        if (l.compared && l.detail_f < kMinFrameTexture && !may_be_glare(l, light))
+        if (l.compared && l.detail_f < kMinFrameTexture)
           unseen.at<uchar>(r, c) = 255;
       }
   cv::Mat labels, stats, centroids;

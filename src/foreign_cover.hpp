@@ -44,7 +44,9 @@ constexpr double kDetailOverPlainTimes = 3.0;
 /// An instance counts as covered when a connected group of cells that do not show its print holds
 /// at least kMinForeignCells cells that show something else, or at least kMinForeignInGroup
 /// such cells among kMinMixedGroupCells or more (the others flat where the print would show: a
-/// cover seen through motion blur is partly flat, partly smeared texture). Groups of noise,
+/// cover seen through motion blur is partly flat, partly smeared texture; or flat and lighter
+/// than the print, as a highlight or a light lid is: a lid's sharp rim shows something else
+/// around them, a highlight fades into the print). Groups of noise,
 /// glare, blur and a touching neighbour's edge on uncovered instances stayed smaller on the
 /// development sets, the README's synthetic ones and docs/hard-sets.md's (4 cells with 3 that
 /// show something else were a packed box's blurred edge).
@@ -138,8 +140,8 @@ bool denies_print(const CellLook& look, const CellComparison& cmp);
 /// leaves out light and blur). A cell shows something else where it correlates under
 /// kMaxForeignCorrelation, where it is flat though the print would show clear detail there and
 /// it is no highlight (kFlatCoverDetail), or where it shows texture on a plain part of the
-/// print (kMinDetailOverPlain); a flat cell that is no highlight does not show the print and
-/// joins the group around it. Cells outside the frame,
+/// print (kMinDetailOverPlain); a flat cell does not show the print and joins the group around
+/// it (a highlight's too, though it shows nothing else itself). Cells outside the frame,
 /// outside the model's mask, near the edge of what is seen of it, or under one of `above`
 /// (instances lying on this one) are not compared. Scattered single cells come from noise and
 /// glare; an object lying on the instance leaves a connected group. `grey`: the frame, CV_8UC1;

@@ -3,10 +3,12 @@
 // as light as the print there (the grey comparison sees flat on flat), makes the instance
 // covered when the frame has colour; a highlight and a coloured light do not. Scenes built
 // from a crop of OpenCV's fruits.jpg beside a plain orange panel. On a grey picture (box.png),
-// a plain disc of clear colour lighter than the print covers it; a highlight does not.
+// a disc of clear colour lighter than the print, its rim fading as a highlight's does, covers
+// it in colour only; a highlight does not.
 #include "../support/box.hpp"
 #include "../support/colour_print.hpp"
 #include "../support/folder_test.hpp"
+#include "../support/soft_disc.hpp"
 #include "common/scene.hpp"
 
 #include <pickdetect/pickdetect.hpp>
@@ -56,19 +58,10 @@ void expect_covered_in_colour_only(const std::vector<Model>& models, const cv::M
   EXPECT_FALSE(in_colour.pickable);
 }
 
-/// A white highlight on `frame` (BGR): a disc of `radius` around `centre`, blurred, towards
-/// level 245 (lighter and greyer than a print, as glare is).
+/// A white highlight on `frame` (BGR): a soft disc towards level 245 (lighter and greyer than a
+/// print, as glare is).
 void add_highlight(cv::Mat& frame, cv::Point centre, int radius) {
-  cv::Mat spot = cv::Mat::zeros(frame.size(), CV_32F);
-  cv::circle(spot, centre, radius, cv::Scalar(1.0), cv::FILLED);
-  cv::GaussianBlur(spot, spot, cv::Size(0, 0), 8.0);
-  for (int y = 0; y < frame.rows; ++y)
-    for (int x = 0; x < frame.cols; ++x) {
-      const float a = spot.at<float>(y, x);
-      cv::Vec3b& p = frame.at<cv::Vec3b>(y, x);
-      for (int c = 0; c < 3; ++c)
-        p[c] = cv::saturate_cast<uchar>(p[c] * (1.0f - a) + 245.0f * a);
-    }
+  test_scene::add_soft_disc(frame, centre, {radius, radius}, 0.0, cv::Vec3b(245, 245, 245));
 }
 
 /// A blue-green as light as the orange in grey.
@@ -171,8 +164,9 @@ TEST(ColourCoverOnAGreyPicture, APlainDiscOfClearColourLighterThanThePrintCovers
   ASSERT_GT(grey_level(light_green), 113 + 30 + 30)
       << "the disc must be lighter than glare's limit";
   cv::Mat frame = box_frame();
-  cv::ellipse(frame, on_box_print(), {30, 22}, kPose.angle, 0, 360,
-              cv::Scalar(light_green[0], light_green[1], light_green[2]), cv::FILLED, cv::LINE_AA);
+  // Its rim fades into the print as a highlight's does (a sharp rim would tell a lid in grey
+  // too: Occlusion.ALightPlainLidWithEdgesOfItsOwnCoversIt).
+  test_scene::add_soft_disc(frame, on_box_print(), {28, 28}, 0.0, light_green);
 
   expect_covered_in_colour_only({test_scene::box_model()}, frame,
                                 "in grey a lighter plain patch may be glare: nothing tells it",

@@ -230,6 +230,18 @@ TEST(Occlusion, APlainObjectLyingOnABoxCoversIt) {
   expect_covered(under, "a plain lid lies on the box");
 }
 
+TEST(Occlusion, ALightPlainLidWithEdgesOfItsOwnCoversIt) {
+  // A plain lid lighter than the print: flat and light inside, as a highlight washing the print
+  // out would be, but with a sharp rim that shows something else all round it, where a
+  // highlight fades into the print.
+  for (const int level : {170, 210}) {
+    const Instance under = detect_one(kLonePose, [&](cv::Mat& s) {
+      cv::ellipse(s, {470, 330}, {38, 30}, 30.0, 0.0, 360.0, cv::Scalar(level), cv::FILLED);
+    });
+    expect_covered(under, ("a light plain lid (grey " + std::to_string(level) + ")").c_str());
+  }
+}
+
 TEST(Occlusion, ATexturedObjectOnAnUnprintedPartOfABoxCoversIt) {
   const Instance free = detect_one(kLonePose, [](cv::Mat&) {});
   ASSERT_FALSE(free.covered);

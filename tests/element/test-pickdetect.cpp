@@ -16,6 +16,7 @@
 
 #include "../support/colour_print.hpp"
 #include "../support/harness.hpp"
+#include "../support/soft_disc.hpp"
 #include "common/scene.hpp"
 #include "common/video-buffer.hpp"
 
@@ -947,10 +948,12 @@ GST_START_TEST(test_colour_names_look_alike_editions) {
 GST_END_TEST;
 
 /// `picture` (BGR, the file `models`) pasted at the middle of a grey scene, under a plain disc of
-/// `axes` and colour `bgr` at the picture's point `under`, pushed in colour formats and in GRAY8:
-/// expects the one instance covered (not pickable) in colour formats and pickable in GRAY8.
+/// `axes` and colour `bgr` at the picture's point `under` (its rim fading as a highlight's does
+/// when `soft`), pushed in colour formats and in GRAY8: expects the one instance covered (not
+/// pickable) in colour formats and pickable in GRAY8.
 static void expect_covered_in_colour_formats(const std::string& models, const cv::Mat& picture,
-                                             cv::Point2f under, cv::Size axes, cv::Scalar bgr) {
+                                             cv::Point2f under, cv::Size axes, cv::Scalar bgr,
+                                             bool soft = false) {
   const cv::Size size(800, 480);
   cv::Mat grey = pickdetect::test_scene::smooth_noise_background(size, 3), scene;
   cv::cvtColor(grey, scene, cv::COLOR_GRAY2BGR);
@@ -958,8 +961,14 @@ static void expect_covered_in_colour_formats(const std::string& models, const cv
   pickdetect::test_scene::paste(scene, picture, {scene_pose(at)});
   const cv::Point2f disc = pickdetect::test_scene::apply(
       pickdetect::test_scene::model_to_scene(picture.size(), scene_pose(at)), under);
-  cv::ellipse(scene, cv::Point(cvRound(disc.x), cvRound(disc.y)), axes, at.angle, 0, 360, bgr,
-              cv::FILLED, cv::LINE_AA);
+  const cv::Point centre(cvRound(disc.x), cvRound(disc.y));
+  if (soft)
+    pickdetect::test_scene::add_soft_disc(scene, centre, axes, at.angle,
+                                          cv::Vec3b(cv::saturate_cast<uchar>(bgr[0]),
+                                                    cv::saturate_cast<uchar>(bgr[1]),
+                                                    cv::saturate_cast<uchar>(bgr[2])));
+  else
+    cv::ellipse(scene, centre, axes, at.angle, 0, 360, bgr, cv::FILLED, cv::LINE_AA);
   cv::cvtColor(scene, grey, cv::COLOR_BGR2GRAY);
 
   for (const char* format : {"BGR", "RGB", "xRGB", "BGRA", "I420", "NV12", "NV21", "GRAY8"}) {
@@ -997,13 +1006,14 @@ GST_END_TEST;
 
 // A model picture without colour (box.png): the frame's colour still goes to the detector in
 // colour formats, where a plain disc of clear colour, lighter than the print under it, covers
-// the box (a highlight would be near white); in GRAY8 it may be glare and the box stays pickable.
+// the box (a highlight would be near white); in GRAY8, its rim fading into the print as a
+// highlight's does, it may be glare and the box stays pickable.
 GST_START_TEST(test_colour_cover_on_a_grey_picture) {
   cv::Mat picture;
   cv::cvtColor(box_model().image, picture, cv::COLOR_GRAY2BGR);
   // Light green (grey level about 191) over the print at picture point (200, 150), grey 113.
   expect_covered_in_colour_formats(kBoxPath, picture, {200.f, 150.f}, {30, 22},
-                                   cv::Scalar(120, 240, 120));
+                                   cv::Scalar(120, 240, 120), true);
 }
 GST_END_TEST;
 
