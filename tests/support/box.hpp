@@ -26,19 +26,19 @@ inline const Model& box_model() {
   return model;
 }
 
-/// The box's print washed out towards white (its darkest level 255 - 0.75 * 255), as a white
-/// glossy carton with pale print gives.
-inline cv::Mat washed_out(const cv::Mat& grey) {
+/// The box's print washed out towards white, to `contrast` of its own (by default its darkest
+/// level 255 - 0.75 * 255), as a white glossy carton with pale print gives.
+inline cv::Mat washed_out(const cv::Mat& grey, double contrast = 0.25) {
   cv::Mat out;
-  grey.convertTo(out, CV_8U, 0.25, 255 * (1 - 0.25));
+  grey.convertTo(out, CV_8U, contrast, 255 * (1 - contrast));
   return out;
 }
 
-/// The box model with its picture washed out, its features found as the loaders find them (at a
-/// lowered threshold: faint print).
-inline Model faint_box_model() {
+/// The box model with its picture washed out (washed_out), its features found as the loaders
+/// find them (at a lowered threshold: faint print).
+inline Model faint_box_model(double contrast = 0.25) {
   Model m = box_model();
-  m.image = washed_out(box_model().image);
+  m.image = washed_out(box_model().image, contrast);
   m.colour.release();
   compute_model_features(m);
   return m;
