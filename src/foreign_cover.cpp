@@ -32,6 +32,9 @@ constexpr int kEdgeMargin = 2;
 constexpr int kClipped = 250;
 /// Share of a cell that must be compared pixels for the cell to count.
 constexpr double kMinCellFill = 0.75;
+/// Under this share of the object's own pixels in a blur's reach, the blur is taken as that
+/// share (a pixel that far from the object is not compared anyway).
+constexpr double kLeastWeight = 1e-3;
 
 /// Per cell: compared pixels, sums of the band-passed frame f and model m (and their squares
 /// and product), and of the shrunk grey levels of both (lf, lm); under a motion blur, the
@@ -91,6 +94,33 @@ cv::Mat detail_of(const cv::Mat& grey) {
   return twice_boxed(picture, kFineBox) - twice_boxed(picture, kLightBox);
 }
 
+/// The object's own pixels (1, elsewhere 0) and their share under each of the band-pass's
+/// blurs.
+struct OwnPixels {
+  cv::Mat weight, fine, light;
+};
+
+OwnPixels own_pixels(const cv::Mat& mask) {
+  OwnPixels own;
+  mask.convertTo(own.weight, CV_32F, 1.0 / 255.0);
+  own.fine = twice_boxed(own.weight, kFineBox);
+  own.light = twice_boxed(own.weight, kLightBox);
+  return own;
+}
+
+/// detail_of with each blur taken over the object's own pixels only (a normalised convolution:
+/// the blur of the pixels weighted by `own`, over the blur of the weights), so that what lies
+/// beside the object does not reach into its rim.
+cv::Mat detail_within(const cv::Mat& grey, const OwnPixels& own) {
+  cv::Mat picture;
+  grey.convertTo(picture, CV_32F);
+  picture = picture.mul(own.weight);
+  cv::Mat fine, light;
+  cv::divide(twice_boxed(picture, kFineBox), cv::max(own.fine, kLeastWeight), fine);
+  cv::divide(twice_boxed(picture, kLightBox), cv::max(own.light, kLeastWeight), light);
+  return fine - light;
+}
+
 /// `picture` carried by `map` into a window of `size` and blurred by `blur` (window pixels) as
 /// the frame is: warped with a margin of the blur's reach, so that what lies past the window's
 /// edge (the frame's) blurs in as it does in the frame.
@@ -146,6 +176,13 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
     if (other->outline.size() >= 3)
       cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{mapped(other->outline, to_small)},
                    cv::Scalar(0));
+  // What lies beside the object (a dark belt, a neighbour, the comparison window's edge across
+  // a turned box) would reach into its rim through the band-pass's blurs as detail the print
+  // does not have there: on a sharp frame both pictures are band-passed over the object's own
+  // pixels only (those of `above` are not its own). Under a motion blur the frame's rim holds
+  // what lies beside the object already, smeared over the blur's length, and the picture is
+  // carried through the same blur: both are band-passed as they are.
+  const OwnPixels own = blurred ? OwnPixels() : own_pixels(mask);
   // Near the edges of what is seen of the object the blurs mix in what lies beside it (more
   // so under motion blur): only the inside is compared.
   cv::erode(
@@ -171,7 +208,8 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
                         cv::BORDER_REPLICATE);
   // Clipped frame pixels (glare) show nothing of what lies there.
   mask.setTo(0, shrunk >= kClipped);
-  const cv::Mat frame = detail_of(shrunk), carried = detail_of(picture);
+  const cv::Mat frame = blurred ? detail_of(shrunk) : detail_within(shrunk, own),
+                carried = blurred ? detail_of(picture) : detail_within(picture, own);
   // Unblurred, the picture's own texture is `carried` itself (its sums m and mm).
   const cv::Mat textured = blurred ? detail_of(sharp) : cv::Mat();
 

@@ -108,7 +108,9 @@ struct CellComparison {
 /// each cell's colour is compared too (CellLook::other_colour). With a `motion_blur` of the frame
 /// (Settings::motion_blur_x, motion_blur_y) of kLeastBlurPx or more, the picture is compared as the
 /// frame shows it: blurred the same way (which cells are compared is still told by the picture's
-/// own texture: where the blur leaves a textured print plain, a flat cell denies nothing).
+/// own texture: where the blur leaves a textured print plain, a flat cell denies nothing);
+/// without one, both pictures are band-passed over the object's own pixels (the model's mask
+/// less `above`), so that what lies beside the object does not reach into its rim.
 CellComparison compare_cells(const Instance& inst, const Model& model, const cv::Mat& grey,
                              const std::vector<const Instance*>& above,
                              const cv::Rect& within = cv::Rect(), const cv::Mat& colour = cv::Mat(),
@@ -137,12 +139,13 @@ bool denies_print(const CellLook& look, const CellComparison& cmp);
 /// among the groups that show enough of something else (kMinForeignCells): the
 /// model's picture, carried into the frame by the instance's homography, and the frame are
 /// compared cell by cell (normalised cross-correlation at half size, through a band-pass that
-/// leaves out light and blur). A cell shows something else where it correlates under
-/// kMaxForeignCorrelation, where it is flat though the print would show clear detail there and
-/// it is no highlight (kFlatCoverDetail), or where it shows texture on a plain part of the
-/// print (kMinDetailOverPlain); a flat cell does not show the print and joins the group around
-/// it (a highlight's too, though it shows nothing else itself). Cells outside the frame,
-/// outside the model's mask, near the edge of what is seen of it, or under one of `above`
+/// leaves out light and blur, taken over the object's own pixels on a frame without motion
+/// blur: what lies beside the object does not reach into its rim). A cell shows something else
+/// where it correlates under kMaxForeignCorrelation, where it is flat though the print would show
+/// clear detail there and it is no highlight (kFlatCoverDetail), or where it shows texture on a
+/// plain part of the print (kMinDetailOverPlain); a flat cell does not show the print and joins the
+/// group around it (a highlight's too, though it shows nothing else itself). Cells outside the
+/// frame, outside the model's mask, near the edge of what is seen of it, or under one of `above`
 /// (instances lying on this one) are not compared. Scattered single cells come from noise and
 /// glare; an object lying on the instance leaves a connected group. `grey`: the frame, CV_8UC1;
 /// `colour`, if not empty, the frame in BGR: a cell whose colour is another than the print's

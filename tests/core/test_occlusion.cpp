@@ -384,3 +384,29 @@ TEST(Occlusion, OverlapAreaOfCrossingAndTouchingOutlines) {
   EXPECT_NEAR(overlap_area(a, b), 2500.0, 1e-3);
   EXPECT_NEAR(overlap_area(a, touching), 0.0, 1e-3);
 }
+
+TEST(Occlusion, AFreeBoxWithAPlainRimTurnedOnADarkGroundIsNotCovered) {
+  // box.png with a plain light margin along its lower side, lying a few degrees off the frame's
+  // axes on a dark ground: the cells along that side hold the ground's edge near them, which
+  // the comparison's blurs would spread into the plain margin as detail the print cannot have.
+  cv::Mat picture;
+  cv::copyMakeBorder(box_picture(), picture, 0, 24, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(240));
+  const Detector detector({test_scene::picture_model("box_with_margin", picture)});
+  const auto detect = [&](const Pose& pose, bool card) {
+    cv::Mat scene = test_scene::plain_background({800, 600}, 15);
+    test_scene::paste(scene, picture, {pose});
+    if (card)
+      striped_card(scene, {365, 425}, 50, 15, 200);
+    const Detection d = detector.detect(scene);
+    EXPECT_EQ(d.instances.size(), 1u);
+    return d.instances.empty() ? Instance() : d.instances[0];
+  };
+  for (const double angle : {2.0, 3.0, 176.0, 184.0}) {
+    const Instance free = detect({{400.f, 300.f}, angle, 1.0}, false);
+    EXPECT_FALSE(free.covered) << "turned " << angle << " degrees";
+    EXPECT_TRUE(free.pickable) << "turned " << angle << " degrees";
+  }
+  // A striped card of the ground's own grey lying across that rim still covers the box.
+  const Instance under = detect({{400.f, 300.f}, 2.0, 1.0}, true);
+  expect_covered(under, "a card lies across the box's plain rim");
+}
