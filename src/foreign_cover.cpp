@@ -208,8 +208,10 @@ CellComparison compare_cells(const Instance& inst, const Model& model, const cv:
                         cv::BORDER_REPLICATE);
   // Clipped frame pixels (glare) show nothing of what lies there.
   mask.setTo(0, shrunk >= kClipped);
-  const cv::Mat frame = blurred ? detail_of(shrunk) : detail_within(shrunk, own),
-                carried = blurred ? detail_of(picture) : detail_within(picture, own);
+  const auto band_pass = [&](const cv::Mat& grey_levels) {
+    return blurred ? detail_of(grey_levels) : detail_within(grey_levels, own);
+  };
+  const cv::Mat frame = band_pass(shrunk), carried = band_pass(picture);
   // Unblurred, the picture's own texture is `carried` itself (its sums m and mm).
   const cv::Mat textured = blurred ? detail_of(sharp) : cv::Mat();
 
