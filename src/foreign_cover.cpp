@@ -393,16 +393,27 @@ int foreign_cover_cells(const Instance& inst, const Model& model, const cv::Mat&
   cv::Mat labels, stats, centroids;
   const int groups = cv::connectedComponentsWithStats(unseen, labels, stats, centroids, 4);
   std::vector<int> other(static_cast<size_t>(groups), 0);
+  // Per group: whether two of its cells of another colour lie side by side.
+  std::vector<char> colour_pair(static_cast<size_t>(groups), 0);
+  auto other_colour = [&](int r, int c) {
+    return r < rows && c < columns && looks[static_cast<size_t>(r) * columns + c].other_colour;
+  };
   for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < columns; ++c)
-      if (foreign.at<uchar>(r, c))
-        ++other[static_cast<size_t>(labels.at<int>(r, c))];
+    for (int c = 0; c < columns; ++c) {
+      if (!foreign.at<uchar>(r, c))
+        continue;
+      const size_t g = static_cast<size_t>(labels.at<int>(r, c));
+      ++other[g];
+      if (other_colour(r, c) && (other_colour(r, c + 1) || other_colour(r + 1, c)))
+        colour_pair[g] = 1;
+    }
   int largest = 0;
   for (int g = 1; g < groups; ++g) {
     const int cells = stats.at<int>(g, cv::CC_STAT_AREA);
     const int seen_other = other[static_cast<size_t>(g)];
     if (seen_other >= kMinForeignCells ||
-        (seen_other >= kMinForeignInGroup && cells >= kMinMixedGroupCells))
+        (seen_other >= kMinForeignInGroup && cells >= kMinMixedGroupCells) ||
+        colour_pair[static_cast<size_t>(g)])
       largest = std::max(largest, cells);
   }
   return largest;

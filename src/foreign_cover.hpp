@@ -49,7 +49,12 @@ constexpr double kDetailOverPlainTimes = 3.0;
 /// around them, a highlight fades into the print). Groups of noise,
 /// glare, blur and a touching neighbour's edge on uncovered instances stayed smaller on the
 /// development sets, the README's synthetic ones and docs/hard-sets.md's (4 cells with 3 that
-/// show something else were a packed box's blurred edge).
+/// show something else were a packed box's blurred edge). A group also counts, whatever its
+/// size, when two of its cells that show another colour than the print's (CellLook::other_colour,
+/// below) lie side by side: on the uncovered instances of the development sets, the cover sets
+/// and the real tote no two such cells did (docs/accuracy.md, "In colour"), and a plain object
+/// of another colour too small for the groups above (about two cells across) is told by its
+/// colour.
 constexpr int kMinForeignCells = 4;
 constexpr int kMinForeignInGroup = 3;
 constexpr int kMinMixedGroupCells = 5;
@@ -136,7 +141,7 @@ bool may_be_glare(const CellLook& look, double light);
 bool denies_print(const CellLook& look, const CellComparison& cmp);
 
 /// The largest 4-connected group of cells where the frame does not show the instance's print,
-/// among the groups that show enough of something else (kMinForeignCells): the
+/// among the groups that show enough of something else (kMinForeignCells; 0 when none does): the
 /// model's picture, carried into the frame by the instance's homography, and the frame are
 /// compared cell by cell (normalised cross-correlation at half size, through a band-pass that
 /// leaves out light and blur, taken over the object's own pixels on a frame without motion

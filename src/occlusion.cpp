@@ -101,8 +101,8 @@ void assess_one(std::vector<Instance>& instances, size_t i, const std::vector<Mo
     std::vector<const Instance*> on_it;
     for (size_t j : above)
       on_it.push_back(&instances[j]);
-    inst.covered = detail::foreign_cover_cells(inst, models[inst.model], grey, on_it, colour,
-                                               motion_blur) >= detail::kMinForeignCells;
+    inst.covered =
+        detail::foreign_cover_cells(inst, models[inst.model], grey, on_it, colour, motion_blur) > 0;
   }
   inst.visibility = 0.0;
   double in_frame = 0.0; // Share of the outline inside the frame.

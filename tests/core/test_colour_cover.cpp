@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: LGPL-2.1-or-later
 // Pick safety in colour: an object of another colour lying on a plain part of a colour print,
 // as light as the print there (the grey comparison sees flat on flat), makes the instance
-// covered when the frame has colour; a highlight and a coloured light do not. Scenes built
+// covered when the frame has colour, and so does a card of another colour too small for the grey
+// comparison's groups; a highlight and a coloured light do not. Scenes built
 // from a crop of OpenCV's fruits.jpg beside a plain orange panel. On a grey picture (box.png),
 // a disc of clear colour lighter than the print, its rim fading as a highlight's does, covers
 // it in colour only; a highlight does not.
@@ -134,6 +135,23 @@ TEST_F(ColourCover, AnObjectOfAnotherColourOnAPlainPartOfThePrintCoversIt) {
   expect_covered_in_colour_only(models_, frame,
                                 "in grey the card is flat on flat: nothing tells it",
                                 "the card's colour is not the print's");
+}
+
+TEST_F(ColourCover, ACardOfAnotherColourTwoCellsAcrossCoversIt) {
+  // A plain blue card 28 x 20 px, about two comparison cells (kCoverCell) across: on the
+  // fruits' print, flat where the print has detail, too few cells for a group in grey; in
+  // colour two cells side by side show a colour the print does not have there. Each place was
+  // missed in colour too before such a pair counted.
+  const cv::Vec3b blue(200, 80, 40);
+  for (const cv::Point2f at : {cv::Point2f(60.f, 60.f), cv::Point2f(60.f, 110.f),
+                               cv::Point2f(100.f, 60.f), cv::Point2f(140.f, 110.f)}) {
+    SCOPED_TRACE(testing::Message() << "card at (" << at.x << ", " << at.y << ") of the picture");
+    cv::Mat frame = scene();
+    cv::ellipse(frame, to_scene(at, picture_.size()), {14, 10}, kPose.angle, 0, 360,
+                cv::Scalar(blue[0], blue[1], blue[2]), cv::FILLED, cv::LINE_AA);
+    expect_covered_in_colour_only(models_, frame, "in grey the card hides too few cells",
+                                  "two cells side by side show another colour than the print's");
+  }
 }
 
 TEST_F(ColourCover, AHighlightOrAColouredLightCoversNothing) {
