@@ -100,6 +100,16 @@ constexpr double kMaxSparseRmsPx = 1.25;
 /// the real tote, poses that gained less were a logo's pose stretched over a box's narrow side.)
 constexpr size_t kThinShortfall = 2;
 constexpr size_t kThinGain = 2;
+/// The automatic bandwidth is a share of the model picture's side: right for objects seen at
+/// the picture's size. Seen smaller (the median of the votes' size ratios below
+/// kNarrowerScale), neighbours' centres lie nearer in the frame than the bandwidth allows for,
+/// and the votes of a box mostly under an identical one climb to the denser mode of the one on
+/// top: the lower box made no hypothesis of its own (hard sets, docs/hard-sets.md). The votes
+/// the instances found leave are then clustered a second time, at the bandwidth narrowed by
+/// that scale (by no more than kLeastNarrowing). The first pass keeps the wide bandwidth: it
+/// gathers the votes of a face foreshortened along one axis, which a narrow one splits.
+constexpr double kNarrowerScale = 0.8;
+constexpr double kLeastNarrowing = 0.25;
 
 /// How many of the given matches fitted no other model about as well (see Ambiguity::Share).
 int distinct_among(const ModelScene& ms, const std::vector<int>& idx) {
@@ -232,35 +242,67 @@ std::vector<std::vector<int>> split_by_rotation(const ModelScene& ms,
   return groups;
 }
 
+/// The hypotheses of centre clusters (indices into ms.votes), strongest first: the clusters,
+/// or with refinement each one split by rotation.
+std::vector<std::vector<int>> hypotheses_of(const ModelScene& ms, const Settings& s,
+                                            std::vector<Cluster> clusters) {
+  std::vector<std::vector<int>> out;
+  for (Cluster& c : clusters) {
+    if (!s.refine) {
+      out.push_back(std::move(c.members));
+      continue;
+    }
+    for (std::vector<int>& g : split_by_rotation(ms, c.members))
+      out.push_back(std::move(g));
+  }
+  std::stable_sort(out.begin(), out.end(),
+                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
+  return out;
+}
+
+/// The second pass's bandwidth (see kNarrowerScale), or 0 when there is none: a bandwidth the
+/// caller chose, the paper's plain voting (no instance claims its votes), or objects seen about
+/// their picture's size or larger.
+double narrowed_bandwidth(const ModelScene& ms, const Settings& s) {
+  if (s.bandwidth > 0.0 || !s.refine || ms.votes.empty())
+    return 0.0;
+  std::vector<float> scales;
+  scales.reserve(ms.votes.size());
+  for (const Vote& v : ms.votes)
+    scales.push_back(v.scale);
+  const double scale = median(std::move(scales));
+  if (!(scale < kNarrowerScale))
+    return 0.0;
+  return ms.bandwidth * std::max(scale, kLeastNarrowing);
+}
+
 } // namespace
 
 std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
   // Hypotheses: the centre clusters (the paper); with refinement, each split by rotation.
-  std::vector<std::vector<int>> hypotheses;
-  for (const Cluster& c : centre_clusters(ms)) {
-    if (!s.refine) {
-      hypotheses.push_back(c.members);
-      continue;
-    }
-    for (std::vector<int>& g : split_by_rotation(ms, c.members))
-      hypotheses.push_back(std::move(g));
-  }
-  // Strongest first: a hypothesis claims its inliers before weaker ones may.
-  std::stable_sort(hypotheses.begin(), hypotheses.end(),
-                   [](const auto& a, const auto& b) { return a.size() > b.size(); });
-
+  std::vector<std::vector<int>> hypotheses = hypotheses_of(ms, s, centre_clusters(ms));
   std::vector<Instance> found;
   std::vector<char> claimed(ms.matches.size(), 0);
   std::vector<const std::vector<int>*> weak;
-  for (const std::vector<int>& members : hypotheses) {
+  // A hypothesis becomes an instance, claiming its inliers, or is dropped (some kept as weak).
+  auto consider = [&](const std::vector<int>& members, bool narrow) {
+    if (narrow) {
+      // A narrow cluster mostly claimed is a part of an instance found already; the wide pass
+      // offers guided matching its weak hypotheses.
+      const auto taken =
+          std::count_if(members.begin(), members.end(), [&](int i) { return claimed[i] != 0; });
+      if (static_cast<int>(members.size()) < s.min_matches ||
+          2 * static_cast<size_t>(taken) > members.size())
+        return;
+    }
     if (static_cast<int>(members.size()) < s.min_matches) {
       if (members.size() >= kMinGuidedVotes)
         weak.push_back(&members);
-      continue;
+      return;
     }
     Similarity pose;
     if (!pose_from_principal_points(ms, members, s.allow_scale, pose))
-      continue;
+      return;
     Instance inst;
     inst.matches = static_cast<int>(members.size());
     inst.distinct_matches = inst.matches;
@@ -281,7 +323,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
           // two or three votes that one stray vote made look like more (below).
           if (members.size() >= kMinGuidedVotes)
             weak.push_back(&members);
-          continue;
+          return;
         }
         place(inst, ms.model, h);
         // Votes left over from a face already found (its similarity took only a part of
@@ -289,7 +331,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
         if (std::any_of(found.begin(), found.end(), [&](const Instance& other) {
               return cv::pointPolygonTest(other.outline, inst.center, false) >= 0;
             }))
-          continue;
+          return;
       } else if (refine_foreshortened(ms, pose, s.allow_scale, members, claimed, in, h,
                                       kMinForeshortenedMatches)) {
         place(inst, ms.model, h);
@@ -300,7 +342,7 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
         place(inst, ms.model, pose);
       }
       if (in.size() < kSparseInliers && inlier_rms(ms, in, inst.homography) > kMaxSparseRmsPx)
-        continue;
+        return;
       claim(ms, in, claimed);
       inst.matches = static_cast<int>(in.size());
       inst.distinct_matches = distinct_among(ms, in);
@@ -309,6 +351,29 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
       inst.support = scene_points(ms, members);
     }
     found.push_back(std::move(inst));
+  };
+  // Strongest first: a hypothesis claims its inliers before weaker ones may.
+  for (const std::vector<int>& members : hypotheses)
+    consider(members, false);
+  // The votes the instances found leave, clustered again at a narrower bandwidth when the
+  // objects are seen smaller than their picture (kNarrowerScale).
+  const double narrow = narrowed_bandwidth(ms, s);
+  std::vector<std::vector<int>> narrower;
+  if (narrow > 0.0) {
+    std::vector<int> left;
+    std::vector<cv::Point2f> centres;
+    for (size_t i = 0; i < ms.votes.size(); ++i)
+      if (!claimed[i]) {
+        left.push_back(static_cast<int>(i));
+        centres.push_back(ms.votes[i].points[0]);
+      }
+    std::vector<Cluster> clusters = mean_shift_clusters(centres, narrow);
+    for (Cluster& c : clusters)
+      for (int& k : c.members)
+        k = left[static_cast<size_t>(k)];
+    narrower = hypotheses_of(ms, s, std::move(clusters));
+    for (const std::vector<int>& members : narrower)
+      consider(members, true);
   }
   if (!ms.model.faint_print() || (weak.empty() && found.empty()) || !s.refine || !s.allow_scale)
     return found;

@@ -41,7 +41,10 @@ struct Settings {
   /// Fewest supporting matches an instance needs (the RANSAC baselines: at least 6, as four
   /// matches always fit a homography).
   int min_matches = 4;
-  double bandwidth = 0.0;  ///< Mean-shift bandwidth in scene pixels; 0 = automatic.
+  /// Mean-shift bandwidth in scene pixels; 0 = automatic: 0.15 of the model picture's smaller
+  /// side, and for objects seen smaller than their picture the votes the instances found leave
+  /// clustered again at that bandwidth narrowed by their scale.
+  double bandwidth = 0.0;
   int max_instances = 0;   ///< At most this many instances per frame, best first; 0 = no limit.
   bool allow_scale = true; ///< Votes use the keypoints' scale ratio (else scale is fixed at 1).
   /// Voting: refit each instance's pose on its own inlier matches (robustly), and share the

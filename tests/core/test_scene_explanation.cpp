@@ -82,6 +82,31 @@ TEST(SceneExplanation, TouchingIdenticalBoxesAreEachFoundOnce) {
   }
 }
 
+// Two identical boxes seen at half their picture's size, the lower one 60 % under the upper one,
+// their centres 48 px apart: within the automatic bandwidth at the picture's size (0.15 of its
+// smaller side, 33 px) of where the lower one's votes climb, so that they joined the upper
+// one's denser mode and the lower box made no hypothesis of its own. Clustered again at the
+// bandwidth narrowed by the scale the votes show, what the upper one leaves is the lower box.
+TEST(SceneExplanation, ABoxMostlyUnderAnIdenticalOneSeenSmallIsFound) {
+  const cv::Mat& box = box_model().image;
+  cv::Mat scene = test_scene::plain_background({420, 340}, 90);
+  const Pose lower{{190.f, 180.f}, 182.0, 0.47};
+  const Pose upper{{236.f, 164.f}, 212.0, 0.5};
+  test_scene::paste(scene, box, {lower});
+  test_scene::paste(scene, box, {upper});
+  const Detection d = box_detector().detect(scene);
+  ASSERT_EQ(d.instances.size(), 2u) << "the upper box and the one mostly under it";
+  for (const Pose& p : {lower, upper}) {
+    const Instance* inst = nearest(d.instances, p.center);
+    ASSERT_NE(inst, nullptr);
+    EXPECT_LT(cv::norm(inst->center - p.center), 2.0)
+        << "expected a box at (" << p.center.x << ", " << p.center.y << "), nearest at ("
+        << inst->center.x << ", " << inst->center.y << ")";
+  }
+  const Instance* under = nearest(d.instances, lower.center);
+  EXPECT_FALSE(under->pickable) << "the lower box is covered";
+}
+
 /// A packed row of three boxes (`poses`), its features, and the three instances found there with
 /// two false copies of the first: shifted half a box along the row (spanning two neighbours) and
 /// turned half a turn, each claiming as much evidence as any true instance.
