@@ -68,12 +68,12 @@ void index_matches(ModelScene& ms) {
   ms.match_grid = PointGrid(std::move(at), std::max(8.0, 0.5 * model_side(ms.model)));
 }
 
-std::vector<Cluster> centre_clusters(const ModelScene& ms, double bandwidth) {
+std::vector<Cluster> centre_clusters(const ModelScene& ms) {
   std::vector<cv::Point2f> centres;
   centres.reserve(ms.votes.size());
   for (const Vote& v : ms.votes)
     centres.push_back(v.points[0]);
-  return mean_shift_clusters(centres, bandwidth > 0.0 ? bandwidth : ms.bandwidth);
+  return mean_shift_clusters(centres, ms.bandwidth);
 }
 
 } // namespace pickdetect::detail

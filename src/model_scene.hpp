@@ -55,9 +55,8 @@ std::vector<cv::Point2f> scene_points(const ModelScene& ms, const std::vector<in
 /// Model positions of the given matches' model keypoints.
 std::vector<cv::Point2f> model_points(const ModelScene& ms, const std::vector<int>& idx);
 
-/// Mean-shift clusters of the centre votes, strongest first, at the bandwidth of `ms` or at
-/// `bandwidth` when it is positive.
-std::vector<Cluster> centre_clusters(const ModelScene& ms, double bandwidth = 0.0);
+/// Mean-shift clusters of the centre votes, strongest first.
+std::vector<Cluster> centre_clusters(const ModelScene& ms);
 
 /// The voting method (voting.cpp) and the RANSAC baselines (ransac.cpp) on one model.
 std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s);

@@ -287,8 +287,8 @@ std::vector<Instance> find_by_voting(const ModelScene& ms, const Settings& s) {
   // A hypothesis becomes an instance, claiming its inliers, or is dropped (some kept as weak).
   auto consider = [&](const std::vector<int>& members, bool narrow) {
     if (narrow) {
-      // A narrow cluster mostly claimed is a part of an instance found already; the wide pass
-      // offers guided matching its weak hypotheses.
+      // A narrow cluster mostly claimed is a part of an instance found already; one of too
+      // few votes is left too (the wide pass has offered guided matching its few-vote ones).
       const auto taken =
           std::count_if(members.begin(), members.end(), [&](int i) { return claimed[i] != 0; });
       if (static_cast<int>(members.size()) < s.min_matches ||
